@@ -1,0 +1,4 @@
+//! One module per CLI verb.
+pub mod equiv;
+pub mod frf;
+pub mod roots;

@@ -1,0 +1,17 @@
+//! One error type for the CLI: every failure becomes one line on stderr and
+//! exit code 2 (see `main`).
+
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum CliError {
+    #[error(transparent)]
+    Io(#[from] nlsdof_io::IoError),
+    #[error(transparent)]
+    Parameter(#[from] nlsdof::ParameterError),
+    #[error(transparent)]
+    Solve(#[from] nlsdof::SolveError),
+    /// A bad command-line value: what was given and what is allowed.
+    #[error("{0}")]
+    Usage(String),
+}

@@ -1,0 +1,337 @@
+//! Steady-state forced response by first-order harmonic balance (paper
+//! §3.1–3.6) for `m x'' + c x' + k x + c_e x'|x'|^η + k_r x|x|^ρ = m γ cos Ωt`.
+//!
+//! ## Exact first-order harmonic balance (`Formulation::HarmonicBalance`)
+//! With `x ≈ a cos(Ωt − φ)` and the equivalent coefficients of Eq 9 and
+//! Eq 22, balancing the first harmonic gives (the algebraic equation behind
+//! Eq 11 and Eq 30)
+//!
+//! ```text
+//! a² [ (k + k_eq(a) − m Ω²)² + (Ω (c + c_eq(a, Ω)))² ] = (m γ)²
+//! tan φ = Ω (c + c_eq) / (k + k_eq − m Ω²),   φ ∈ [0, π] (phase lag of x behind γ)
+//! ```
+//!
+//! ## Near-resonance modulation form (`Formulation::Modulation`, Eq 30)
+//! ```text
+//! Ω/ω_n = 1 + k_eq/(2 m ω_n²) ± √( γ² / ((2ω_n²)² a²) − (ζ + ζ_eq)² )
+//! ```
+//! the first-order expansion of the exact form about `Ω = ω_n`
+//! (`1 − Ω²/ω_n² ≈ 2(1 − Ω/ω_n)`, `Ω ≈ ω_n` in the damping terms, so
+//! `ζ_eq` is evaluated at `Ω = ω_n`). It is an approximation: its error
+//! grows with the distance from resonance and with the damping.
+//!
+//! Both are solved in the dimensionless form (`x = a ω_n² / γ`,
+//! `ν = Ω / ω_n`)
+//!
+//! ```text
+//! P(x) = x² [ (s₀ + s₁ x^ρ)² + (d₀ + d₁ x^η)² ] = 1
+//! exact:      s₀ = 1 − ν²,   s₁ = b,  d₀ = 2ζν,  d₁ = c ν^{1+η}
+//! modulation: s₀ = 2(1 − ν), s₁ = b,  d₀ = 2ζ,   d₁ = c
+//! b = g(ρ) β (γ/ω_n²)^ρ / ω_n²,  c = g(η) κ (γ/ω_n)^η / ω_n
+//! ```
+//!
+//! `P(x) − 1` expanded is a sum of at most six real powers of `x`, whose
+//! positive roots are *all* isolated by [`crate::power_sum`] — no grid, so
+//! two roots closer than any grid are still found.
+//!
+//! ## Stability (slow flow)
+//! Averaging the complex amplitude `A` (`x = Re A e^{iΩt}`) gives
+//! `2iΩ A' = γ − Z(|A|) A`, `Z = α_eff − Ω² + iΩ δ_eff`. Its Jacobian at a
+//! steady state has `det ∝ d(a²|Z|²)/da` and `trace ∝ −(2 Im Z + a ∂Im Z/∂a)`,
+//! so a steady state is stable iff
+//!
+//! ```text
+//! dP/dx > 0   (saddle-node / fold criterion; the middle of three roots fails it)
+//! 2 d₀ + (2 + η) d₁ x^η > 0   (no Hopf instability; always true for η > −2)
+//! ```
+
+mod equation;
+mod folds;
+mod sweep;
+
+pub use equation::ResponseEquation;
+
+use crate::error::{ParameterError, SolveError};
+use crate::model::{Model, NormalisedModel};
+
+/// Which steady-state equation to solve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Formulation {
+    /// Exact first-order harmonic balance (default).
+    #[default]
+    HarmonicBalance,
+    /// The paper's near-resonance form, Eq 30 (an approximation of the exact one).
+    Modulation,
+}
+
+/// Direction of a stepped-sine sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SweepDirection {
+    Up,
+    Down,
+}
+
+/// One steady state (a root of the harmonic-balance equation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SteadyState {
+    /// Displacement amplitude a (m, zero-to-peak).
+    pub amplitude: f64,
+    /// Phase lag φ of x behind the input γ cos Ωt, rad, in [0, π].
+    pub phase: f64,
+    /// Slow-flow stability (saddle-node and Hopf criteria).
+    pub stable: bool,
+}
+
+/// Why no steady-state motion exists.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NoMotion {
+    /// Coulomb friction (η = −1) holds the mass: the friction force
+    /// `4 c_f / π` (its first-harmonic value) is at least the input force
+    /// amplitude `m γ`. Both values are given per unit mass (m/s²).
+    Sticking { friction_accel: f64, input_accel: f64 },
+    /// No positive root for another reason (e.g. η < −1, where the damping
+    /// force grows without bound as the amplitude goes to zero).
+    NoRoot,
+}
+
+/// All steady states at one (γ, Ω).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RootSet {
+    /// Input frequency Ω, rad/s.
+    pub omega: f64,
+    /// Roots sorted by increasing amplitude.
+    pub roots: Vec<SteadyState>,
+    /// Set when `roots` is empty.
+    pub no_motion: Option<NoMotion>,
+}
+
+/// A fold (saddle-node, jump) point of the response curve of one level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fold {
+    /// Frequency, rad/s.
+    pub omega: f64,
+    /// Amplitude where the two roots merge, m.
+    pub amplitude: f64,
+    /// `true` if the pair of roots exists just *above* `omega`
+    /// (it is born as Ω increases), `false` if it exists just below.
+    pub pair_above: bool,
+}
+
+/// A jump seen by a stepped-sine sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Jump {
+    /// Fold frequency where the followed branch ends, rad/s.
+    pub omega: f64,
+    /// Amplitude on the branch that ends (at the fold), m.
+    pub amplitude_before: f64,
+    /// Amplitude of the branch jumped to (at the fold frequency), m.
+    pub amplitude_after: f64,
+}
+
+/// One step of a sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepPoint {
+    /// Ω, rad/s.
+    pub omega: f64,
+    /// a, m (0 when `sticking`).
+    pub amplitude: f64,
+    /// Phase lag, rad (0 when `sticking`).
+    pub phase: f64,
+    /// The followed state is stable (false only where no stable root exists).
+    pub stable: bool,
+    /// No motion (Coulomb sticking or no root at all).
+    pub sticking: bool,
+}
+
+/// Result of a stepped-sine sweep at one level.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    pub direction: SweepDirection,
+    pub points: Vec<SweepPoint>,
+    /// Jumps in sweep order.
+    pub jumps: Vec<Jump>,
+    /// All folds of this level between the first and last frequency, increasing.
+    pub folds: Vec<Fold>,
+}
+
+/// Point where the phase lag is exactly 90° (Table 8 reports these).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseQuadrature {
+    /// Ω, rad/s.
+    pub omega: f64,
+    /// a, m.
+    pub amplitude: f64,
+}
+
+/// The forced response of one model at one input level γ.
+#[derive(Debug, Clone, Copy)]
+pub struct ForcedResponse {
+    pub(crate) model: NormalisedModel,
+    pub(crate) gamma: f64,
+    pub(crate) formulation: Formulation,
+    /// Amplitude scale γ/ω_n² (m): x = a / scale.
+    pub(crate) scale: f64,
+    pub(crate) omega_n: f64,
+    /// g(ρ) β scale^ρ / ω_n²
+    pub(crate) b: f64,
+    /// g(η) κ (ω_n scale)^η / ω_n
+    pub(crate) c: f64,
+}
+
+fn check_positive(name: &'static str, v: f64) -> Result<(), ParameterError> {
+    if !v.is_finite() {
+        return Err(ParameterError::NotFinite { name, value: v });
+    }
+    if v <= 0.0 {
+        return Err(ParameterError::NotPositive { name, value: v });
+    }
+    Ok(())
+}
+
+impl ForcedResponse {
+    /// Response of `model` to `γ cos Ωt` with `gamma` = γ (m/s², zero-to-peak, > 0).
+    pub fn new(model: &Model, gamma: f64, formulation: Formulation) -> Result<Self, SolveError> {
+        Self::from_normalised(&model.normalised()?, gamma, formulation)
+    }
+
+    /// As [`ForcedResponse::new`] from mass-normalised parameters.
+    pub fn from_normalised(
+        model: &NormalisedModel,
+        gamma: f64,
+        formulation: Formulation,
+    ) -> Result<Self, SolveError> {
+        model.validate()?;
+        check_positive("gamma", gamma)?;
+        let omega_n = model.omega_n();
+        let scale = gamma / model.alpha;
+        let b = if model.beta == 0.0 {
+            0.0
+        } else {
+            crate::power_law::g_unchecked(model.rho) * model.beta * scale.powf(model.rho)
+                / model.alpha
+        };
+        let c = if model.kappa == 0.0 {
+            0.0
+        } else {
+            crate::power_law::g_unchecked(model.eta) * model.kappa * (omega_n * scale).powf(model.eta)
+                / omega_n
+        };
+        if !(b.is_finite() && c.is_finite() && scale.is_finite() && scale > 0.0) {
+            return Err(SolveError::Overflow { amplitude: scale, omega: omega_n });
+        }
+        Ok(Self { model: *model, gamma, formulation, scale, omega_n, b, c })
+    }
+
+    /// Input level γ, m/s².
+    pub fn gamma(&self) -> f64 {
+        self.gamma
+    }
+
+    /// The formulation in use.
+    pub fn formulation(&self) -> Formulation {
+        self.formulation
+    }
+
+    /// The dimensionless response equation at frequency `omega` (rad/s).
+    pub fn equation(&self, omega: f64) -> ResponseEquation {
+        let nu = omega / self.omega_n;
+        let zeta = self.model.zeta();
+        match self.formulation {
+            Formulation::HarmonicBalance => ResponseEquation::new(
+                1.0 - nu * nu,
+                self.b,
+                self.model.rho,
+                2.0 * zeta * nu,
+                if self.c == 0.0 { 0.0 } else { self.c * nu.powf(1.0 + self.model.eta) },
+                self.model.eta,
+            ),
+            Formulation::Modulation => ResponseEquation::new(
+                2.0 * (1.0 - nu),
+                self.b,
+                self.model.rho,
+                2.0 * zeta,
+                self.c,
+                self.model.eta,
+            ),
+        }
+    }
+
+    fn no_motion_reason(&self, eq: &ResponseEquation) -> NoMotion {
+        if self.model.kappa > 0.0 && self.model.eta == -1.0 && eq.d1 >= 1.0 {
+            // P(x) >= (d1)^2 for all x > 0; in physical units 4 c_f/(π m) >= γ.
+            NoMotion::Sticking {
+                friction_accel: 4.0 / std::f64::consts::PI * self.model.kappa,
+                input_accel: self.gamma,
+            }
+        } else {
+            NoMotion::NoRoot
+        }
+    }
+
+    /// All steady states at frequency `omega` (rad/s, > 0), sorted by
+    /// amplitude, with phase and stability.
+    pub fn steady_states(&self, omega: f64) -> Result<RootSet, SolveError> {
+        check_positive("omega", omega)?;
+        let eq = self.equation(omega);
+        let xs = eq.roots()?;
+        let roots: Vec<SteadyState> = xs
+            .iter()
+            .map(|&x| SteadyState {
+                amplitude: x * self.scale,
+                phase: eq.phase(x),
+                stable: eq.is_stable(x),
+            })
+            .collect();
+        let no_motion = roots.is_empty().then(|| self.no_motion_reason(&eq));
+        Ok(RootSet { omega, roots, no_motion })
+    }
+
+    /// All folds (saddle-node points) with `omega_min <= Ω <= omega_max`
+    /// (rad/s), sorted by frequency, located to ~1e-13 relative.
+    pub fn folds(&self, omega_min: f64, omega_max: f64) -> Result<Vec<Fold>, SolveError> {
+        folds::find_folds(self, omega_min, omega_max)
+    }
+
+    /// Stepped-sine sweep over the strictly increasing frequencies `omegas`
+    /// (rad/s), in `direction` (for `Down` the points are returned in sweep
+    /// order, i.e. decreasing frequency). See [`sweep`](self) for the rules.
+    pub fn sweep(&self, omegas: &[f64], direction: SweepDirection) -> Result<Sweep, SolveError> {
+        sweep::sweep(self, omegas, direction)
+    }
+
+    /// The point of the response curve where the phase lag is 90°
+    /// (`k + k_eq(a) = m Ω²`, i.e. the curve meets the backbone). If the
+    /// curve meets the backbone more than once, the largest amplitude is
+    /// returned. `None` if it never does.
+    pub fn phase_quadrature(&self) -> Result<Option<PhaseQuadrature>, SolveError> {
+        folds::phase_quadrature(self)
+    }
+}
+
+/// Backbone curve: the undamped free-vibration frequency at amplitude `a`
+/// (m), rad/s.
+///
+/// ```text
+/// exact:      Ω_bb(a) = √( (k + k_eq(a)) / m ) = ω_n √(1 + k_eq/k)
+/// modulation: Ω_bb(a) = ω_n (1 + k_eq / (2k))                        (Eq 30 with γ = 0)
+/// ```
+/// `None` where a softening term makes `k + k_eq <= 0` (exact form).
+pub fn backbone(model: &NormalisedModel, amplitude: f64, formulation: Formulation) -> Option<f64> {
+    let wn = model.omega_n();
+    let keq_over_k = if model.beta == 0.0 || amplitude == 0.0 {
+        0.0
+    } else {
+        crate::power_law::g_unchecked(model.rho) * model.beta * amplitude.abs().powf(model.rho)
+            / model.alpha
+    };
+    match formulation {
+        Formulation::HarmonicBalance => {
+            let r = 1.0 + keq_over_k;
+            (r > 0.0 && r.is_finite()).then(|| wn * r.sqrt())
+        }
+        Formulation::Modulation => {
+            let r = 1.0 + 0.5 * keq_over_k;
+            (r > 0.0 && r.is_finite()).then(|| wn * r)
+        }
+    }
+}

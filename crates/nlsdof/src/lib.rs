@@ -1,0 +1,40 @@
+//! # nlsdof — nonlinear single-degree-of-freedom power-law models
+//!
+//! Pure mathematics, no I/O. Implements the generalised power-law SDoF model
+//! of Civera et al. (2021), *Generalised power-law stiffness and damping for
+//! nonlinear reduced-order models* (the "paper"; equation numbers in the docs
+//! refer to it):
+//!
+//! ```text
+//! m x'' + c x' + k x + c_e x'|x'|^η + k_r x|x|^ρ = m γ(t)          (Eq 29)
+//! ```
+//!
+//! * [`power_law`] — the shape factor `g(μ)` (Eq 12/24), its integer closed
+//!   forms (Eq 17, 25, 26) and the equivalent coefficients `k_eq`, `c_eq`,
+//!   `ζ_eq` (Eq 9, 22, 23).
+//! * [`model`] — physical and mass-normalised model with validation.
+//! * [`power_sum`] — isolation of *all* positive roots of a sum of real
+//!   powers (generalised Descartes rule + Rolle recursion); the engine that
+//!   guarantees no steady state is missed near a fold.
+//! * [`harmonic_balance`] — exact first-order harmonic balance (and the
+//!   paper's near-resonance Eq 30): all steady states with phase and
+//!   stability, folds, stepped-sine branch following, backbone, phase
+//!   quadrature.
+//!
+//! Conventions: SI units; amplitudes and input levels are **zero-to-peak**
+//! (the paper quotes peak-to-peak); frequencies are angular (rad/s) in the
+//! library, Hz only at the CLI.
+
+pub mod error;
+pub mod harmonic_balance;
+pub mod model;
+pub mod power_law;
+pub mod power_sum;
+
+pub use error::{ParameterError, SolveError};
+pub use harmonic_balance::{
+    backbone, Formulation, ForcedResponse, Fold, Jump, NoMotion, PhaseQuadrature, RootSet,
+    SteadyState, Sweep, SweepDirection, SweepPoint,
+};
+pub use model::{Model, NormalisedModel};
+pub use power_law::PowerLaw;

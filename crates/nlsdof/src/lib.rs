@@ -26,10 +26,13 @@
 //! library, Hz only at the CLI.
 
 pub mod error;
+pub mod excitation;
 pub mod harmonic_balance;
 pub mod model;
 pub mod power_law;
 pub mod power_sum;
+pub mod simulation;
+pub mod stepped_sine;
 
 pub use error::{ParameterError, SolveError};
 pub use harmonic_balance::{

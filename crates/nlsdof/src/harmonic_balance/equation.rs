@@ -1,10 +1,286 @@
+//! The dimensionless steady-state equation at one frequency,
+//!
+//! ```text
+//! P(x) = x² [ S(x)² + D(x)² ] = 1,   S = s₀ + s₁ x^ρ,   D = d₀ + d₁ x^η
+//! ```
+//!
+//! (see the module docs of [`super`] for the coefficients of each
+//! formulation). Expanded, `P(x) − 1` is the sum of real powers
+//!
+//! ```text
+//! −1 + (s₀² + d₀²) x² + 2 s₀ s₁ x^{2+ρ} + s₁² x^{2+2ρ} + 2 d₀ d₁ x^{2+η} + d₁² x^{2+2η}
+//! ```
+//!
+//! whose roots [`crate::power_sum`] isolates exactly. Sign tests at the top
+//! two levels use the unexpanded (accurate) forms
+//! `ln P(t) = 2t + ln(S² + D²)` and `d/dt[e^{−e_min t}(P − 1)]`, `t = ln x`,
+//! because the expansion cancels digits near resonance (`s₀ ≈ −s₁x^ρ`).
+
 use crate::error::SolveError;
-/// Dimensionless response equation (stub).
-#[derive(Debug, Clone, Copy)]
-pub struct ResponseEquation { pub s0: f64, pub s1: f64, pub rho: f64, pub d0: f64, pub d1: f64, pub eta: f64 }
+use crate::power_sum::PowerSum;
+
+/// Dimensionless response equation `x²[(s₀ + s₁x^ρ)² + (d₀ + d₁x^η)²] = 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResponseEquation {
+    pub s0: f64,
+    pub s1: f64,
+    pub rho: f64,
+    pub d0: f64,
+    pub d1: f64,
+    pub eta: f64,
+}
+
+/// Largest `|ln|term||` allowed in the accurate evaluators (e^700 < f64::MAX).
+const LN_SAFE: f64 = 690.0;
+
 impl ResponseEquation {
-    pub fn new(s0: f64, s1: f64, rho: f64, d0: f64, d1: f64, eta: f64) -> Self { Self { s0, s1, rho, d0, d1, eta } }
-    pub fn roots(&self) -> Result<Vec<f64>, SolveError> { todo!() }
-    pub fn phase(&self, _x: f64) -> f64 { todo!() }
-    pub fn is_stable(&self, _x: f64) -> bool { todo!() }
+    pub fn new(s0: f64, s1: f64, rho: f64, d0: f64, d1: f64, eta: f64) -> Self {
+        Self { s0, s1, rho, d0, d1, eta }
+    }
+
+    /// `P(x) − 1` as a sum of real powers of `x`.
+    pub fn power_sum(&self) -> PowerSum {
+        let (s0, s1, d0, d1, r, e) = (self.s0, self.s1, self.d0, self.d1, self.rho, self.eta);
+        PowerSum::new([
+            (0.0, -1.0),
+            (2.0, s0 * s0 + d0 * d0),
+            (2.0 + r, 2.0 * s0 * s1),
+            (2.0 + 2.0 * r, s1 * s1),
+            (2.0 + e, 2.0 * d0 * d1),
+            (2.0 + 2.0 * e, d1 * d1),
+        ])
+    }
+
+    /// `(S, D, ρ s₁ x^ρ, η d₁ x^η)` at `t = ln x`.
+    #[inline]
+    fn parts(&self, t: f64) -> (f64, f64, f64, f64) {
+        let sr = if self.s1 == 0.0 { 0.0 } else { self.s1 * (self.rho * t).exp() };
+        let de = if self.d1 == 0.0 { 0.0 } else { self.d1 * (self.eta * t).exp() };
+        (self.s0 + sr, self.d0 + de, self.rho * sr, self.eta * de)
+    }
+
+    /// `ln P(e^t) = 2t + ln(S² + D²)`: negative below, positive above the
+    /// forcing level, zero at a steady state.
+    #[inline]
+    pub fn ln_p(&self, t: f64) -> f64 {
+        let (s, d, _, _) = self.parts(t);
+        2.0 * t + 2.0 * s.hypot(d).ln()
+    }
+
+    /// `(ln P, d ln P/dt)` at `t = ln x`:
+    /// `d ln P/dt = 2 + 2 (S·ρs₁x^ρ + D·ηd₁x^η) / (S² + D²)`.
+    #[inline]
+    pub fn ln_p_and_slope(&self, t: f64) -> (f64, f64) {
+        let (s, d, st, dt) = self.parts(t);
+        let h = s.hypot(d);
+        let q = h * h;
+        (2.0 * t + 2.0 * h.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
+    }
+
+    /// `P(x)`.
+    pub fn p(&self, x: f64) -> f64 {
+        let (s, d, _, _) = self.parts(x.ln());
+        x * x * (s * s + d * d)
+    }
+
+    /// Sign-equivalent of `d/dt [e^{−e_min t}(P − 1)] ∝ P′(t) − e_min (P − 1)`,
+    /// divided by `max(P, 1)` so it never overflows.
+    fn level1(&self, t: f64, e_min: f64) -> f64 {
+        let (lp, slope) = self.ln_p_and_slope(t);
+        if lp > 0.0 {
+            slope + e_min * ((-lp).exp() - 1.0)
+        } else {
+            let p = lp.exp();
+            p * slope - e_min * (p - 1.0)
+        }
+    }
+
+    /// Range of `t` in which the accurate evaluators cannot overflow.
+    fn safe_range(&self) -> (f64, f64) {
+        let (mut lo, mut hi) = (-LN_SAFE / 2.0, LN_SAFE / 2.0);
+        for (c, e) in [(self.s1, self.rho), (self.d1, self.eta)] {
+            if c == 0.0 || e == 0.0 {
+                continue;
+            }
+            let lim = (LN_SAFE - c.abs().ln()) / e;
+            if e > 0.0 {
+                hi = hi.min(lim);
+            } else {
+                lo = lo.max(lim);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Every positive root `x` of `P(x) = 1`, increasing. Exact isolation
+    /// (no grid); each root polished to machine precision in `ln x`.
+    ///
+    /// Errors only if a root lies beyond the range where `P` is representable
+    /// in `f64` (absurd parameters), never silently.
+    pub fn roots(&self) -> Result<Vec<f64>, SolveError> {
+        Ok(self.roots_t()?.into_iter().map(f64::exp).collect())
+    }
+
+    /// As [`Self::roots`] in `t = ln x`.
+    pub fn roots_t(&self) -> Result<Vec<f64>, SolveError> {
+        let ps = self.power_sum();
+        if ps.sign_changes() == 0 {
+            return Ok(Vec::new());
+        }
+        let (lo, hi) = self.search_range(&ps)?;
+        let e_min = ps.exponents()[0];
+        let top = |t: f64| self.ln_p(t);
+        let second = |t: f64| self.level1(t, e_min);
+        Ok(ps.roots_in(lo, hi, Some(&top), Some(&second)))
+    }
+
+    /// Critical points of `e^{−e_min t}(P − 1)` (in `t`) inside the root
+    /// search range: the local extrema between which roots appear and vanish
+    /// in pairs. A fold is a critical point where `P = 1`.
+    pub fn critical_points_t(&self) -> Result<Vec<f64>, SolveError> {
+        let ps = self.power_sum();
+        if ps.sign_changes() < 2 {
+            return Ok(Vec::new());
+        }
+        let (lo, hi) = self.search_range(&ps)?;
+        let e_min = ps.exponents()[0];
+        let second = |t: f64| self.level1(t, e_min);
+        Ok(ps.reduced_derivative().roots_in(lo, hi, Some(&second), None))
+    }
+
+    fn search_range(&self, ps: &PowerSum) -> Result<(f64, f64), SolveError> {
+        let (blo, bhi) = ps.root_bounds().unwrap_or((0.0, 0.0));
+        let (blo, bhi) = (blo - 0.5, bhi + 0.5);
+        let (slo, shi) = self.safe_range();
+        let (sgn_lo, sgn_hi) = ps.asymptotic_signs();
+        let (mut lo, mut hi) = (blo, bhi);
+        if bhi > shi {
+            hi = shi;
+            if self.ln_p(hi).signum() != sgn_hi {
+                return Err(SolveError::Overflow { amplitude: hi.exp(), omega: f64::NAN });
+            }
+        }
+        if blo < slo {
+            lo = slo;
+            if self.ln_p(lo).signum() != sgn_lo {
+                return Err(SolveError::Overflow { amplitude: lo.exp(), omega: f64::NAN });
+            }
+        }
+        Ok((lo, hi.max(lo)))
+    }
+
+    /// Phase lag `φ = atan2(D, S) ∈ [0, π]` at amplitude `x`.
+    pub fn phase(&self, x: f64) -> f64 {
+        let (s, d, _, _) = self.parts(x.ln());
+        d.atan2(s)
+    }
+
+    /// Slow-flow stability at a root `x`: `dP/dx > 0` (saddle-node) and
+    /// `2d₀ + (2+η) d₁ x^η > 0` (Hopf).
+    pub fn is_stable(&self, x: f64) -> bool {
+        let t = x.ln();
+        let (_, slope) = self.ln_p_and_slope(t);
+        let (_, d, _, dt) = self.parts(t);
+        // 2 d0 + (2+η) d1 x^η = 2 D + η d1 x^η
+        slope > 0.0 && 2.0 * d + dt > 0.0
+    }
+
+    /// Upper bound on every root: `P ≥ x² d₀²` and `P ≥ x^{2+2η} d₁²`
+    /// (valid when `d₀, d₁ ≥ 0`), so roots satisfy `x ≤ 1/d₀` and
+    /// `x ≤ d₁^{−1/(1+η)}` (η > −1). `∞` if neither applies.
+    pub fn amplitude_bound(&self) -> f64 {
+        amplitude_bound(self.d0, self.d1, self.eta)
+    }
+
+    /// Safeguarded Newton on `ln P(t) = 0` from `t0`, for use where the root
+    /// is known to be unique and `ln P` increasing up to `t_max` (with
+    /// `ln P > 0` beyond). Returns `None` if it fails to converge.
+    pub fn solve_unique(&self, t0: f64, t_max: f64) -> Option<f64> {
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, t_max);
+        let mut t = t0.min(t_max);
+        for _ in 0..60 {
+            let (f, fp) = self.ln_p_and_slope(t);
+            if f == 0.0 {
+                return Some(t);
+            }
+            if f < 0.0 {
+                lo = lo.max(t);
+            } else {
+                hi = hi.min(t);
+            }
+            let mut next = t - f / fp;
+            if !(fp > 0.0) || !next.is_finite() || next <= lo || next >= hi {
+                next = if lo.is_finite() && hi.is_finite() {
+                    0.5 * (lo + hi)
+                } else if lo.is_finite() {
+                    lo + 1.0
+                } else {
+                    hi - 1.0
+                };
+            }
+            if (next - t).abs() <= 4.0 * f64::EPSILON * (1.0 + t.abs()) {
+                return Some(next);
+            }
+            t = next;
+        }
+        None
+    }
+}
+
+/// See [`ResponseEquation::amplitude_bound`].
+pub(crate) fn amplitude_bound(d0: f64, d1: f64, eta: f64) -> f64 {
+    let mut b = f64::INFINITY;
+    if d0 > 0.0 {
+        b = b.min(1.0 / d0);
+    }
+    if d1 > 0.0 && eta > -1.0 {
+        b = b.min(d1.powf(-1.0 / (1.0 + eta)));
+    }
+    b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_root_is_closed_form() {
+        let eq = ResponseEquation::new(0.3, 0.0, 0.0, 0.05, 0.0, 0.0);
+        let r = eq.roots().unwrap();
+        assert_eq!(r.len(), 1);
+        let exact = 1.0 / (0.3f64 * 0.3 + 0.05 * 0.05).sqrt();
+        assert!((r[0] - exact).abs() < 1e-14 * exact);
+        assert!(eq.is_stable(r[0]));
+        assert!((eq.phase(r[0]) - 0.05f64.atan2(0.3)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn duffing_three_roots_middle_unstable() {
+        // strongly detuned above resonance, hardening: three roots
+        let eq = ResponseEquation::new(1.0 - 1.3f64.powi(2), 0.01, 2.0, 2.0 * 0.01 * 1.3, 0.0, 0.0);
+        let r = eq.roots().unwrap();
+        assert_eq!(r.len(), 3, "{r:?}");
+        assert!(eq.is_stable(r[0]) && !eq.is_stable(r[1]) && eq.is_stable(r[2]));
+        for x in &r {
+            assert!((eq.p(*x) - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn coulomb_sticking_has_no_root() {
+        // eta = -1: P >= d1^2; d1 >= 1 means friction beats forcing
+        let eq = ResponseEquation::new(0.5, 0.0, 0.0, 0.1, 1.2, -1.0);
+        assert!(eq.roots().unwrap().is_empty());
+        let eq = ResponseEquation::new(0.5, 0.0, 0.0, 0.1, 0.8, -1.0);
+        assert_eq!(eq.roots().unwrap().len(), 1);
+    }
+
+    #[test]
+    fn unique_newton_matches_isolation() {
+        let eq = ResponseEquation::new(-0.01, 1e-4, 4.0, 0.013, 1e-6, 3.0);
+        let iso = eq.roots_t().unwrap();
+        assert_eq!(iso.len(), 1);
+        let t = eq.solve_unique(0.0, eq.amplitude_bound().ln()).unwrap();
+        assert!((t - iso[0]).abs() < 1e-14);
+    }
 }

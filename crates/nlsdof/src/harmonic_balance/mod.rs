@@ -273,7 +273,7 @@ impl ForcedResponse {
     pub fn steady_states(&self, omega: f64) -> Result<RootSet, SolveError> {
         check_positive("omega", omega)?;
         let eq = self.equation(omega);
-        let xs = eq.roots()?;
+        let xs = eq.roots().map_err(|e| folds::with_omega(e, omega))?;
         let roots: Vec<SteadyState> = xs
             .iter()
             .map(|&x| SteadyState {
@@ -334,4 +334,45 @@ pub fn backbone(model: &NormalisedModel, amplitude: f64, formulation: Formulatio
             (r > 0.0 && r.is_finite()).then(|| wn * r)
         }
     }
+}
+
+/// The paper's Eq 30 read explicitly: the two frequencies (rad/s) at which
+/// the near-resonance (modulation) response curve passes through amplitude
+/// `amplitude` (m) at input level `gamma` (m/s²):
+///
+/// ```text
+/// Ω±/ω_n = 1 + k_eq(a)/(2 m ω_n²) ± √( γ² / ((2ω_n²)² a²) − (ζ + ζ_eq(a))² )
+/// ζ = c/(2mω_n),  ζ_eq = g(η) c_e |ω_n a|^η / (2 m ω_n)   (Eq 23 with Ω ≈ ω_n)
+/// ```
+///
+/// `Ok(None)` where the square root is imaginary (the amplitude is above the
+/// peak of the curve). This is an approximation of the exact harmonic
+/// balance ([`Formulation::HarmonicBalance`]), valid near resonance for
+/// light damping.
+pub fn modulation_frequencies(
+    model: &Model,
+    gamma: f64,
+    amplitude: f64,
+) -> Result<Option<(f64, f64)>, SolveError> {
+    let n = model.normalised()?;
+    check_positive("gamma", gamma)?;
+    check_positive("amplitude", amplitude)?;
+    let wn = n.omega_n();
+    let keq_over_k = if n.beta == 0.0 {
+        0.0
+    } else {
+        crate::power_law::g_unchecked(n.rho) * n.beta * amplitude.powf(n.rho) / n.alpha
+    };
+    let zeta_eq = if n.kappa == 0.0 {
+        0.0
+    } else {
+        crate::power_law::g_unchecked(n.eta) * n.kappa * (wn * amplitude).powf(n.eta) / (2.0 * wn)
+    };
+    let disc = (gamma / (2.0 * wn * wn * amplitude)).powi(2) - (n.zeta() + zeta_eq).powi(2);
+    if !(disc >= 0.0) {
+        return Ok(None);
+    }
+    let centre = 1.0 + 0.5 * keq_over_k;
+    let half = disc.sqrt();
+    Ok(Some((wn * (centre - half), wn * (centre + half))))
 }

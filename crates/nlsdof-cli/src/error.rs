@@ -11,6 +11,10 @@ pub enum CliError {
     Parameter(#[from] nlsdof::ParameterError),
     #[error(transparent)]
     Solve(#[from] nlsdof::SolveError),
+    #[error(transparent)]
+    Simulation(#[from] nlsdof::simulation::SimulationError),
+    #[error(transparent)]
+    Signal(#[from] nlsdof_io::signal_file::SignalFileError),
     /// A bad command-line value: what was given and what is allowed.
     #[error("{0}")]
     Usage(String),

@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod plot;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -13,6 +14,7 @@ use error::CliError;
 /// zero-to-peak; frequencies on the command line are in Hz.
 #[derive(Parser)]
 #[command(name = "nlsdof", version, about, long_about = None, propagate_version = true)]
+#[command(after_long_help = cmd::roots::top_level_help())]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -26,6 +28,13 @@ enum Command {
     Roots(cmd::roots::Args),
     /// Amplitude-frequency curves at several input levels, as a stepped-sine sweep sees them.
     Frf(cmd::frf::Args),
+    /// Simulate the response to a recorded input acceleration (CSV or MAT), writing t,accel,x,v.
+    Simulate(cmd::simulate::Args),
+    /// Virtual stepped-sine test rig: dwell until steady at each frequency, record amplitude and phase.
+    #[command(name = "stepped-sine")]
+    SteppedSine(cmd::stepped_sine::Args),
+    /// Make an input signal (CSV t,accel): sine, chirp or stepped sine.
+    Signal(cmd::signal::Args),
 }
 
 fn main() {
@@ -35,11 +44,37 @@ fn main() {
         std::process::exit(130);
     })
     .ok();
-    let cli = Cli::parse();
+    let cli = Cli::try_parse().unwrap_or_else(|e| {
+        use clap::error::ErrorKind as K;
+        if !e.use_stderr()
+            || matches!(e.kind(), K::DisplayHelp | K::DisplayVersion | K::DisplayHelpOnMissingArgumentOrSubcommand)
+        {
+            e.exit();
+        }
+        // Usage errors too are one line on stderr and exit code 2.
+        let text = e.render().to_string();
+        let parts: Vec<&str> = text
+            .lines()
+            .map(|l| l.trim().trim_start_matches("error: "))
+            .filter(|l| !l.is_empty() && !l.starts_with("For more information") && !l.starts_with("Usage:"))
+            .collect();
+        let mut msg = String::new();
+        for p in parts {
+            if !msg.is_empty() {
+                msg.push_str(if msg.ends_with(':') { " " } else { "; " });
+            }
+            msg.push_str(p);
+        }
+        eprintln!("nlsdof: error: {msg} (see --help)");
+        std::process::exit(2);
+    });
     let result: Result<(), CliError> = match cli.command {
         Command::Equiv(a) => cmd::equiv::run(a),
         Command::Roots(a) => cmd::roots::run(a),
         Command::Frf(a) => cmd::frf::run(a),
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::SteppedSine(a) => cmd::stepped_sine::run(a),
+        Command::Signal(a) => cmd::signal::run(a),
     };
     if let Err(e) = result {
         eprintln!("nlsdof: error: {e}");

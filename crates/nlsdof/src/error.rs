@@ -20,7 +20,7 @@ pub enum ParameterError {
     NotOddExponent { value: i64 },
     #[error("frequency range [{min}, {max}] is invalid: need 0 < min < max, both finite")]
     InvalidRange { min: f64, max: f64 },
-    #[error("frequencies must be strictly increasing: f[{index}] = {value} follows {previous}")]
+    #[error("frequencies must be strictly increasing: element {index} ({value} rad/s) does not exceed the previous one ({previous} rad/s)")]
     NotIncreasing { index: usize, value: f64, previous: f64 },
     #[error("{name} is empty")]
     Empty { name: &'static str },

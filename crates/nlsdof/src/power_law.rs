@@ -78,7 +78,7 @@ pub fn g(mu: f64) -> Result<f64, ParameterError> {
 pub fn g_unchecked(mu: f64) -> f64 {
     let p = 0.5 * (3.0 + mu);
     let q = 2.0 + 0.5 * mu;
-    const TWO_OVER_SQRT_PI: f64 = 1.128_379_167_095_512_6;
+    use std::f64::consts::FRAC_2_SQRT_PI as TWO_OVER_SQRT_PI;
     if q < 150.0 {
         TWO_OVER_SQRT_PI * libm::tgamma(p) / libm::tgamma(q)
     } else if p < 300.0 {

@@ -180,8 +180,25 @@ impl PowerSum {
         second: Option<Evaluator<'_>>,
     ) -> Vec<f64> {
         let mut out = Vec::new();
-        self.roots_rec(lo, hi, top, second, &mut out);
+        self.roots_rec(lo, hi, top, second, &mut out, None);
         out
+    }
+
+    /// As [`Self::roots_in`], also returning the roots of the reduced
+    /// derivative used to separate them (the critical points of
+    /// `e^{−e₁t}F` in `(lo, hi)`; empty when Descartes' rule already settled
+    /// the count, i.e. fewer than two sign changes).
+    pub fn roots_and_critical_points_in(
+        &self,
+        lo: f64,
+        hi: f64,
+        top: Option<Evaluator<'_>>,
+        second: Option<Evaluator<'_>>,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let mut out = Vec::new();
+        let mut crit = Vec::new();
+        self.roots_rec(lo, hi, top, second, &mut out, Some(&mut crit));
+        (out, crit)
     }
 
     fn roots_rec(
@@ -191,6 +208,7 @@ impl PowerSum {
         top: Option<Evaluator<'_>>,
         second: Option<Evaluator<'_>>,
         out: &mut Vec<f64>,
+        crit_out: Option<&mut Vec<f64>>,
     ) {
         if self.len() < 2 || lo >= hi || self.sign_changes() == 0 {
             return;
@@ -203,8 +221,12 @@ impl PowerSum {
         if self.sign_changes() >= 2 {
             let d = self.reduced_derivative();
             let mut crit = Vec::new();
-            d.roots_rec(lo, hi, second, None, &mut crit);
-            points.extend(crit.into_iter().filter(|&c| c > lo && c < hi));
+            d.roots_rec(lo, hi, second, None, &mut crit, None);
+            crit.retain(|&c| c > lo && c < hi);
+            points.extend(crit.iter().copied());
+            if let Some(c) = crit_out {
+                *c = crit;
+            }
         }
         points.push(hi);
         let mut vals: Vec<f64> = points.iter().map(|&t| f(t)).collect();

@@ -1,8 +1,376 @@
+//! `nlsdof frf`: amplitude–frequency curves at several input levels, as a
+//! stepped-sine sweep sees them (jumps, folds, phase quadrature), as text,
+//! JSON or CSV, optionally plotted to SVG.
+
+use super::roots::{check_frequency, check_gamma, conventions_help, load_model, model_summary, FormulationArg};
 use crate::error::CliError;
+use crate::plot;
+use nlsdof::{ForcedResponse, NoMotion, PhaseQuadrature, Sweep, SweepDirection};
+use serde_json::json;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Largest accepted `--steps` (keeps memory and output size sane).
+const MAX_STEPS: usize = 10_000_000;
+
+/// `--sweep` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepArg {
+    /// Increasing frequency (default).
+    Up,
+    /// Decreasing frequency.
+    Down,
+}
+
+impl SweepArg {
+    pub fn to_core(self) -> SweepDirection {
+        match self {
+            SweepArg::Up => SweepDirection::Up,
+            SweepArg::Down => SweepDirection::Down,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            SweepArg::Up => "up",
+            SweepArg::Down => "down",
+        }
+    }
+}
 
 #[derive(clap::Args)]
-pub struct Args {}
+#[command(
+    about = "Amplitude-frequency curves at several input levels, as a stepped-sine sweep sees them",
+    after_long_help = frf_long_help()
+)]
+pub struct Args {
+    /// Model file (TOML, SI units; see MODEL FILE below).
+    #[arg(long, value_name = "FILE")]
+    pub model: PathBuf,
+    /// Input levels gamma, m/s^2 zero-to-peak, comma-separated (each finite and > 0).
+    #[arg(long, value_name = "G1,G2,..", allow_hyphen_values = true)]
+    pub gamma: String,
+    /// Lowest frequency, Hz (> 0).
+    #[arg(long = "f-min", value_name = "F0", allow_hyphen_values = true)]
+    pub f_min: f64,
+    /// Highest frequency, Hz (> f-min).
+    #[arg(long = "f-max", value_name = "F1", allow_hyphen_values = true)]
+    pub f_max: f64,
+    /// Number of frequencies, linearly spaced from f-min to f-max inclusive (>= 2).
+    #[arg(long, value_name = "N")]
+    pub steps: usize,
+    /// Sweep direction of the stepped-sine test.
+    #[arg(long, value_enum, default_value_t = SweepArg::Up)]
+    pub sweep: SweepArg,
+    /// Steady-state equation: exact harmonic balance or the paper's Eq 30.
+    #[arg(long, value_enum, default_value_t = FormulationArg::Hb)]
+    pub formulation: FormulationArg,
+    /// Print JSON instead of the text summary.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Print CSV (level,gamma,f_hz,amplitude,phase_deg) instead of the text summary.
+    #[arg(long)]
+    pub csv: bool,
+    /// Also write an SVG plot of amplitude vs frequency to FILE.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+}
 
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage("not implemented yet".into()))
+fn frf_long_help() -> String {
+    format!(
+        "DESCRIPTION:
+  Amplitude-frequency response curves at one or more input levels, computed as a
+  stepped-sine test sees them: at each of N linearly spaced frequencies the structure
+  settles on a stable steady state, following its branch from the previous step (the
+  first step starts from rest). Where the followed branch ends at a fold the response
+  jumps to another stable branch, so sweeping up and down gives different curves
+  (hysteresis) for a hardening or softening model.
+
+  For each level the verb reports the swept points, the jumps, all folds (saddle-node
+  points) in the band, and the phase-quadrature point (phase lag 90 deg, where the
+  curve crosses the backbone; the paper's Table 8 reports these).
+
+{}
+
+OUTPUT:
+  text (default): a summary per level - peak amplitude and its frequency, jumps, folds,
+        phase quadrature; amplitudes in m (zero-to-peak), frequencies in Hz
+  --json: {{\"levels\":[{{\"gamma\":..,\"sweep\":\"up\",\"points\":[{{\"f_hz\":..,\"amplitude\":..,\"phase_deg\":..,
+        \"stable\":..,\"sticking\":..}}],\"jumps\":[{{\"f_hz\":..,\"amplitude_before\":..,\"amplitude_after\":..}}],
+        \"folds_hz\":[..],\"phase_quadrature\":{{\"f_hz\":..,\"amplitude\":..}} or null}}]}}
+        points are in sweep order (decreasing frequency for --sweep down)
+  --csv: header `level,gamma,f_hz,amplitude,phase_deg`, then one row per swept point
+        (level = 1-based index in the --gamma list), points in sweep order
+  --plot FILE.svg: amplitude vs frequency, one colour per level; stable branches solid,
+        unstable dashed, backbone dotted grey, swept points as markers, jumps as arrows.
+        The plot is written atomically: on any error no file is created.
+
+EXAMPLES:
+  nlsdof frf --model examples/har-wing.toml --gamma 0.41,0.62,0.81,1.00,1.23 \\
+      --f-min 5.2 --f-max 5.6 --steps 200 --plot wing.svg
+  nlsdof frf --model examples/duffing-strong.toml --gamma 0.5,1,2 --f-min 8 --f-max 16 \\
+      --steps 400 --sweep down --csv > down.csv",
+        conventions_help()
+    )
+}
+
+/// Parses the comma-separated `--gamma` list.
+fn parse_gammas(text: &str) -> Result<Vec<f64>, CliError> {
+    let mut out = Vec::new();
+    for item in text.split(',') {
+        let item = item.trim();
+        let v: f64 = item.parse().map_err(|_| {
+            CliError::Usage(format!(
+                "--gamma: '{item}' is not a number: give input levels (m/s^2, zero-to-peak) as a comma-separated list of finite numbers > 0, e.g. 0.5,1,2"
+            ))
+        })?;
+        out.push(check_gamma(v)?);
+    }
+    Ok(out)
+}
+
+/// `steps` frequencies (Hz) from `f_min` to `f_max` inclusive.
+fn linspace(f_min: f64, f_max: f64, steps: usize) -> Vec<f64> {
+    let n = steps - 1;
+    (0..steps)
+        .map(|i| if i == n { f_max } else { f_min + (f_max - f_min) * (i as f64 / n as f64) })
+        .collect()
+}
+
+/// Result of one input level.
+pub struct Level {
+    pub gamma: f64,
+    pub response: ForcedResponse,
+    pub sweep: Sweep,
+    pub phase_quadrature: Option<PhaseQuadrature>,
+}
+
+fn hz(omega: f64) -> f64 {
+    omega / (2.0 * PI)
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    // All checks first, all computation in memory; files are written last
+    // and atomically, so an error never leaves a file behind.
+    let gammas = parse_gammas(&args.gamma)?;
+    let f_min = check_frequency("--f-min", args.f_min)?;
+    let f_max = check_frequency("--f-max", args.f_max)?;
+    if f_min >= f_max {
+        return Err(CliError::Usage(format!(
+            "--f-min {f_min} must be below --f-max {f_max} (Hz)"
+        )));
+    }
+    if args.steps < 2 || args.steps > MAX_STEPS {
+        return Err(CliError::Usage(format!(
+            "--steps {} is not allowed: need an integer from 2 to {MAX_STEPS}",
+            args.steps
+        )));
+    }
+    let model = load_model(&args.model)?;
+    let formulation = args.formulation.to_core();
+    let freqs = linspace(f_min, f_max, args.steps);
+    let omegas: Vec<f64> = freqs.iter().map(|f| 2.0 * PI * f).collect();
+    if omegas.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(CliError::Usage(format!(
+            "--steps {} is too many for --f-min {f_min} .. --f-max {f_max} Hz: neighbouring frequencies coincide in floating point; use fewer steps or a wider range",
+            args.steps
+        )));
+    }
+
+    let mut levels = Vec::with_capacity(gammas.len());
+    for &gamma in &gammas {
+        let response = ForcedResponse::new(&model, gamma, formulation)?;
+        let sweep = response.sweep(&omegas, args.sweep.to_core())?;
+        let phase_quadrature = response.phase_quadrature()?;
+        levels.push(Level { gamma, response, sweep, phase_quadrature });
+    }
+
+    let mut stdout_text = if args.json {
+        json_output(&args, &model, &levels)
+    } else if args.csv {
+        csv_output(&levels)
+    } else {
+        text_output(&args, &model, &levels, f_min, f_max)
+    };
+
+    if let Some(path) = &args.plot {
+        let title = format!(
+            "{} - {}, sweep {}",
+            args.model.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            args.formulation.description(),
+            args.sweep.name()
+        );
+        let input = plot::FrfPlot {
+            title,
+            model: model.normalised()?,
+            formulation,
+            direction: args.sweep.to_core(),
+            f_min,
+            f_max,
+            levels: &levels,
+        };
+        let svg = plot::render_frf(&input)?;
+        nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;
+        if !args.json && !args.csv {
+            let _ = writeln!(stdout_text, "\nplot written to {}", path.display());
+        }
+    }
+    print!("{stdout_text}");
+    Ok(())
+}
+
+fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
+    let lv: Vec<_> = levels
+        .iter()
+        .map(|l| {
+            let points: Vec<_> = l
+                .sweep
+                .points
+                .iter()
+                .map(|p| {
+                    json!({
+                        "f_hz": hz(p.omega),
+                        "amplitude": p.amplitude,
+                        "phase_deg": p.phase.to_degrees(),
+                        "stable": p.stable,
+                        "sticking": p.sticking,
+                    })
+                })
+                .collect();
+            let jumps: Vec<_> = l
+                .sweep
+                .jumps
+                .iter()
+                .map(|j| {
+                    json!({
+                        "f_hz": hz(j.omega),
+                        "amplitude_before": j.amplitude_before,
+                        "amplitude_after": j.amplitude_after,
+                    })
+                })
+                .collect();
+            let folds: Vec<f64> = l.sweep.folds.iter().map(|f| hz(f.omega)).collect();
+            let fold_amps: Vec<f64> = l.sweep.folds.iter().map(|f| f.amplitude).collect();
+            json!({
+                "gamma": l.gamma,
+                "sweep": args.sweep.name(),
+                "points": points,
+                "jumps": jumps,
+                "folds_hz": folds,
+                "fold_amplitudes": fold_amps,
+                "phase_quadrature": l.phase_quadrature.map(|q| json!({"f_hz": hz(q.omega), "amplitude": q.amplitude})),
+            })
+        })
+        .collect();
+    let out = json!({
+        "model": args.model.display().to_string(),
+        "f_n_hz": hz(model.omega_n()),
+        "zeta": model.zeta(),
+        "formulation": args.formulation.name(),
+        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak", "f_hz": "Hz", "phase_deg": "deg lag of x behind input"},
+        "levels": lv,
+    });
+    format!("{out}\n")
+}
+
+fn csv_output(levels: &[Level]) -> String {
+    let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg\n");
+    for (i, l) in levels.iter().enumerate() {
+        for p in &l.sweep.points {
+            let _ = writeln!(s, "{},{},{},{},{}", i + 1, l.gamma, hz(p.omega), p.amplitude, p.phase.to_degrees());
+        }
+    }
+    s
+}
+
+fn text_output(args: &Args, model: &nlsdof::Model, levels: &[Level], f_min: f64, f_max: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "model {}: {}", args.model.display(), model_summary(model));
+    let _ = writeln!(
+        s,
+        "stepped-sine sweep {}, {} .. {} Hz, {} steps; formulation {} ({})",
+        args.sweep.name(),
+        f_min,
+        f_max,
+        args.steps,
+        args.formulation.name(),
+        args.formulation.description()
+    );
+    let _ = writeln!(s, "amplitudes zero-to-peak in m; phase = lag of x behind the input, deg");
+    for (i, l) in levels.iter().enumerate() {
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "level {}: gamma = {} m/s^2 zero-to-peak ({} m/s^2 peak-to-peak)",
+            i + 1,
+            l.gamma,
+            2.0 * l.gamma
+        );
+        let peak = l
+            .sweep
+            .points
+            .iter()
+            .filter(|p| !p.sticking)
+            .max_by(|a, b| a.amplitude.total_cmp(&b.amplitude));
+        match peak {
+            Some(p) => {
+                let _ = writeln!(
+                    s,
+                    "  peak (swept)       {:.6e} m at {:.6} Hz, phase lag {:.2} deg",
+                    p.amplitude,
+                    hz(p.omega),
+                    p.phase.to_degrees()
+                );
+            }
+            None => {
+                let _ = writeln!(s, "  peak (swept)       none: no motion at any step");
+            }
+        }
+        let sticking = l.sweep.points.iter().filter(|p| p.sticking).count();
+        if let Some(first) = l.sweep.points.iter().find(|p| p.sticking) {
+            let why = match l.response.steady_states(first.omega).ok().and_then(|r| r.no_motion) {
+                Some(NoMotion::Sticking { .. }) => "Coulomb friction sticks",
+                _ => "no steady-state root",
+            };
+            let _ = writeln!(s, "  no motion          at {} of {} steps ({why})", sticking, l.sweep.points.len());
+        }
+        let unstable = l.sweep.points.iter().filter(|p| !p.sticking && !p.stable).count();
+        if unstable > 0 {
+            let _ = writeln!(s, "  no stable state    at {unstable} steps (followed state unstable)");
+        }
+        if l.sweep.jumps.is_empty() {
+            let _ = writeln!(s, "  jumps              none");
+        }
+        for j in &l.sweep.jumps {
+            let _ = writeln!(
+                s,
+                "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
+                hz(j.omega),
+                j.amplitude_before,
+                j.amplitude_after,
+                if j.amplitude_after > j.amplitude_before { "up" } else { "down" }
+            );
+        }
+        if l.sweep.folds.is_empty() {
+            let _ = writeln!(s, "  folds              none in the band");
+        }
+        for f in &l.sweep.folds {
+            let _ = writeln!(s, "  fold               at {:.6} Hz, amplitude {:.6e} m", hz(f.omega), f.amplitude);
+        }
+        match l.phase_quadrature {
+            Some(q) => {
+                let _ = writeln!(
+                    s,
+                    "  phase quadrature   {:.6} Hz, amplitude {:.6e} m{}",
+                    hz(q.omega),
+                    q.amplitude,
+                    if hz(q.omega) < f_min || hz(q.omega) > f_max { " (outside the band)" } else { "" }
+                );
+            }
+            None => {
+                let _ = writeln!(s, "  phase quadrature   none");
+            }
+        }
+    }
+    s
 }

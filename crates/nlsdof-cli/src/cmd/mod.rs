@@ -2,3 +2,6 @@
 pub mod equiv;
 pub mod frf;
 pub mod roots;
+pub mod signal;
+pub mod simulate;
+pub mod stepped_sine;

@@ -64,7 +64,7 @@ impl ResponseEquation {
     #[inline]
     pub fn ln_p(&self, t: f64) -> f64 {
         let (s, d, _, _) = self.parts(t);
-        2.0 * t + 2.0 * s.hypot(d).ln()
+        2.0 * t + ln_sum_sq(s, d)
     }
 
     /// `(ln P, d ln P/dt)` at `t = ln x`:
@@ -72,9 +72,24 @@ impl ResponseEquation {
     #[inline]
     pub fn ln_p_and_slope(&self, t: f64) -> (f64, f64) {
         let (s, d, st, dt) = self.parts(t);
-        let h = s.hypot(d);
-        let q = h * h;
-        (2.0 * t + 2.0 * h.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
+        if s.abs() < 1e150 && d.abs() < 1e150 {
+            let q = s * s + d * d;
+            (2.0 * t + q.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
+        } else {
+            let h = s.hypot(d);
+            (2.0 * t + 2.0 * h.ln(), 2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)))
+        }
+    }
+
+    /// `(phase, stable)` at a root `x` from one evaluation (see
+    /// [`Self::phase`], [`Self::is_stable`]).
+    #[inline]
+    pub fn phase_and_stability(&self, x: f64) -> (f64, bool) {
+        let (s, d, st, dt) = self.parts(x.ln());
+        let q = s * s + d * d;
+        // sign of d ln P/dt = 2 + 2(S st + D dt)/q, scaled by q/2 > 0
+        let slope_sign = q + s * st + d * dt;
+        (d.atan2(s), slope_sign > 0.0 && 2.0 * d + dt > 0.0)
     }
 
     /// `P(x)`.
@@ -97,7 +112,9 @@ impl ResponseEquation {
 
     /// Range of `t` in which the accurate evaluators cannot overflow.
     fn safe_range(&self) -> (f64, f64) {
-        let (mut lo, mut hi) = (-LN_SAFE / 2.0, LN_SAFE / 2.0);
+        // ln P = 2t + ln(S² + D²) never forms x², so only x itself and the
+        // terms of S and D must be representable.
+        let (mut lo, mut hi) = (-LN_SAFE, LN_SAFE);
         for (c, e) in [(self.s1, self.rho), (self.d1, self.eta)] {
             if c == 0.0 || e == 0.0 {
                 continue;
@@ -123,15 +140,22 @@ impl ResponseEquation {
 
     /// As [`Self::roots`] in `t = ln x`.
     pub fn roots_t(&self) -> Result<Vec<f64>, SolveError> {
+        Ok(self.roots_and_critical_points_t()?.0)
+    }
+
+    /// Roots and the critical points separating them (see
+    /// [`Self::critical_points_t`]; empty when the root count is settled by
+    /// Descartes' rule, in which case no fold can be near), in `t = ln x`.
+    pub fn roots_and_critical_points_t(&self) -> Result<(Vec<f64>, Vec<f64>), SolveError> {
         let ps = self.power_sum();
         if ps.sign_changes() == 0 {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), Vec::new()));
         }
         let (lo, hi) = self.search_range(&ps)?;
         let e_min = ps.exponents()[0];
         let top = |t: f64| self.ln_p(t);
         let second = |t: f64| self.level1(t, e_min);
-        Ok(ps.roots_in(lo, hi, Some(&top), Some(&second)))
+        Ok(ps.roots_and_critical_points_in(lo, hi, Some(&top), Some(&second)))
     }
 
     /// Critical points of `e^{−e_min t}(P − 1)` (in `t`) inside the root
@@ -208,7 +232,13 @@ impl ResponseEquation {
             } else {
                 hi = hi.min(t);
             }
-            let mut next = t - f / fp;
+            let step = f / fp;
+            let mut next = t - step;
+            // quadratic convergence: the error after this step is O(step²)
+            // (ln P is nearly linear in t), below ε once |step| < 1e-9
+            if fp > 0.0 && step.abs() < 1e-9 && next > lo && next < hi {
+                return Some(next);
+            }
             if !(fp > 0.0) || !next.is_finite() || next <= lo || next >= hi {
                 next = if lo.is_finite() && hi.is_finite() {
                     0.5 * (lo + hi)
@@ -224,6 +254,16 @@ impl ResponseEquation {
             t = next;
         }
         None
+    }
+}
+
+/// `ln(s² + d²)` without overflow.
+#[inline]
+fn ln_sum_sq(s: f64, d: f64) -> f64 {
+    if s.abs() < 1e150 && d.abs() < 1e150 {
+        (s * s + d * d).ln()
+    } else {
+        2.0 * s.hypot(d).ln()
     }
 }
 
@@ -261,6 +301,9 @@ mod tests {
         let r = eq.roots().unwrap();
         assert_eq!(r.len(), 3, "{r:?}");
         assert!(eq.is_stable(r[0]) && !eq.is_stable(r[1]) && eq.is_stable(r[2]));
+        for x in &r {
+            assert_eq!(eq.phase_and_stability(*x), (eq.phase(*x), eq.is_stable(*x)));
+        }
         for x in &r {
             assert!((eq.p(*x) - 1.0).abs() < 1e-12);
         }

@@ -31,14 +31,9 @@ struct Sample {
 
 fn sample(r: &ForcedResponse, omega: f64) -> Result<Sample, SolveError> {
     let eq = r.equation(omega);
-    let count = eq.roots_t().map_err(|e| with_omega(e, omega))?.len();
-    let crit = eq
-        .critical_points_t()
-        .map_err(|e| with_omega(e, omega))?
-        .into_iter()
-        .map(|t| (t, eq.ln_p(t)))
-        .collect();
-    Ok(Sample { omega, count, crit })
+    let (roots, crit) = eq.roots_and_critical_points_t().map_err(|e| with_omega(e, omega))?;
+    let crit = crit.into_iter().map(|t| (t, eq.ln_p(t))).collect();
+    Ok(Sample { omega, count: roots.len(), crit })
 }
 
 pub(crate) fn with_omega(e: SolveError, omega: f64) -> SolveError {
@@ -125,12 +120,25 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
         return Err(ParameterError::InvalidRange { min: lo, max: hi }.into());
     }
     let mut out = Vec::new();
-    let mut prev = sample(r, lo)?;
+    let grid: Vec<f64> =
+        (0..=GRID).map(|i| if i == GRID { hi } else { lo * (hi / lo).powf(i as f64 / GRID as f64) }).collect();
+    // Cells where the analytic one-root certificate holds contain no fold:
+    // skip them (no root isolation needed there).
+    let fast = super::sweep::fast_path_possible(r);
+    let eqs: Vec<_> = grid.iter().map(|&w| r.equation(w)).collect();
+    let mut prev: Option<Sample> = None;
     for i in 1..=GRID {
-        let w = if i == GRID { hi } else { lo * (hi / lo).powf(i as f64 / GRID as f64) };
-        let s = sample(r, w)?;
-        locate(r, &prev, &s, 0, &mut out)?;
-        prev = s;
+        if fast && super::sweep::certify_cell(&eqs[i - 1], &eqs[i]) {
+            prev = None;
+            continue;
+        }
+        let a = match prev.take() {
+            Some(s) => s,
+            None => sample(r, grid[i - 1])?,
+        };
+        let b = sample(r, grid[i])?;
+        locate(r, &a, &b, 0, &mut out)?;
+        prev = Some(b);
     }
     out.sort_by(|a, b| a.omega.total_cmp(&b.omega));
     out.dedup_by(|a, b| (a.omega - b.omega).abs() <= 1e-13 * b.omega && a.pair_above == b.pair_above);
@@ -158,13 +166,17 @@ pub(crate) fn phase_quadrature(r: &ForcedResponse) -> Result<Option<PhaseQuadrat
     };
     let h = |t: f64| -> f64 {
         let nu = nu_of(t);
+        if nu.is_nan() {
+            // no positive backbone frequency at this amplitude
+            return f64::NAN;
+        }
         let xe = if c == 0.0 { 0.0 } else { c * (eta * t).exp() };
         let d = if exact { 2.0 * zeta * nu + xe * nu.powf(1.0 + eta) } else { 2.0 * zeta + xe };
         t + d.ln()
     };
     let finish = |t: f64| {
-        let nu = nu_of(t);
-        Some(PhaseQuadrature { omega: nu * r.omega_n, amplitude: t.exp() * r.scale })
+        let (omega, amplitude) = (nu_of(t) * r.omega_n, t.exp() * r.scale);
+        (omega.is_finite() && amplitude.is_finite()).then_some(PhaseQuadrature { omega, amplitude })
     };
     let monotone = b >= 0.0 && rho >= 0.0 && (c == 0.0 || eta >= -1.0) && zeta > 0.0;
     if monotone {
@@ -187,17 +199,19 @@ pub(crate) fn phase_quadrature(r: &ForcedResponse) -> Result<Option<PhaseQuadrat
         }
         return Ok(None);
     }
-    // general case: scan ln x over a wide range, keep the largest-amplitude crossing
+    // general case (softening, negative exponents): scan ln x upwards and
+    // keep the first (smallest-amplitude) crossing — the resonance peak of
+    // the branch that grows out of the linear resonance; later crossings lie
+    // on detached or unbounded large-amplitude branches.
     let (t0, t1, n) = (-40.0, 40.0, 1600);
-    let mut best = None;
     let mut prev = (t0, h(t0));
     for i in 1..=n {
         let t = t0 + (t1 - t0) * i as f64 / n as f64;
         let ft = h(t);
         if ft.is_finite() && prev.1.is_finite() && (ft > 0.0) != (prev.1 > 0.0) {
-            best = Some(crate::power_sum::brent(&h, prev.0, t, prev.1, ft));
+            return Ok(finish(crate::power_sum::brent(&h, prev.0, t, prev.1, ft)));
         }
         prev = (t, ft);
     }
-    Ok(best.and_then(finish))
+    Ok(None)
 }

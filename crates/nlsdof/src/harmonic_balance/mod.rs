@@ -276,12 +276,14 @@ impl ForcedResponse {
         let xs = eq.roots().map_err(|e| folds::with_omega(e, omega))?;
         let roots: Vec<SteadyState> = xs
             .iter()
-            .map(|&x| SteadyState {
-                amplitude: x * self.scale,
-                phase: eq.phase(x),
-                stable: eq.is_stable(x),
+            .map(|&x| {
+                let (phase, stable) = eq.phase_and_stability(x);
+                SteadyState { amplitude: x * self.scale, phase, stable }
             })
             .collect();
+        if let Some(bad) = roots.iter().find(|s| !(s.amplitude.is_finite() && s.amplitude > 0.0)) {
+            return Err(SolveError::Overflow { amplitude: bad.amplitude, omega });
+        }
         let no_motion = roots.is_empty().then(|| self.no_motion_reason(&eq));
         Ok(RootSet { omega, roots, no_motion })
     }
@@ -300,9 +302,10 @@ impl ForcedResponse {
     }
 
     /// The point of the response curve where the phase lag is 90°
-    /// (`k + k_eq(a) = m Ω²`, i.e. the curve meets the backbone). If the
-    /// curve meets the backbone more than once, the largest amplitude is
-    /// returned. `None` if it never does.
+    /// (`k + k_eq(a) = m Ω²`, i.e. the curve meets the backbone). Unique for
+    /// hardening with `η ≥ −1`; otherwise the smallest-amplitude crossing
+    /// (the peak grown from the linear resonance) is returned. `None` if the
+    /// curve never meets the backbone at a positive frequency.
     pub fn phase_quadrature(&self) -> Result<Option<PhaseQuadrature>, SolveError> {
         folds::phase_quadrature(self)
     }

@@ -18,7 +18,10 @@
 //!    past the fold the amplitude decreases to the nearest stable root below,
 //!    otherwise it increases to the nearest stable root above. The jump is
 //!    reported at the fold frequency.
-//! 4. **Sticking** (no root, e.g. Coulomb friction stronger than the input):
+//! 4. **Loss of stability without a fold** (Hopf, possible only for
+//!    η < −2): the state moves to the nearest stable root, reported as a
+//!    jump at that step.
+//! 5. **Sticking** (no root, e.g. Coulomb friction stronger than the input):
 //!    the point is reported with `sticking = true`, and motion restarts from
 //!    rest (rule 1) where roots exist again.
 //!
@@ -51,7 +54,7 @@ fn validate_omegas(omegas: &[f64]) -> Result<(), ParameterError> {
 
 /// Whether the fast-path certificate can apply at all to this response:
 /// `ρ ≥ 0` (or no stiffness term) and `η > −1` (or no damping term).
-fn fast_path_possible(r: &ForcedResponse) -> bool {
+pub(crate) fn fast_path_possible(r: &ForcedResponse) -> bool {
     (r.b == 0.0 || r.model.rho >= 0.0) && (r.c == 0.0 || r.model.eta > -1.0)
 }
 
@@ -70,7 +73,7 @@ fn fast_path_possible(r: &ForcedResponse) -> bool {
 /// `s₀`, `d₀`, `d₁` are monotone in Ω for both formulations, so their
 /// extremes over the cell are at its ends and the test holds for the whole
 /// cell.
-fn certify_cell(a: &ResponseEquation, b: &ResponseEquation) -> bool {
+pub(crate) fn certify_cell(a: &ResponseEquation, b: &ResponseEquation) -> bool {
     let s1 = a.s1;
     if s1 == 0.0 || a.rho == 0.0 {
         return true;
@@ -85,11 +88,14 @@ fn certify_cell(a: &ResponseEquation, b: &ResponseEquation) -> bool {
     if rho * rho * s0_max * s0_max < 4.0 * (1.0 + rho) * d0_min * d0_min {
         return true;
     }
-    let x_hi = amplitude_bound(d0_min, a.d1.min(b.d1), a.eta);
-    if !x_hi.is_finite() {
-        return false;
+    let rhs = s0sq_min + d0_min * d0_min;
+    let lhs_factor = (2.0 + rho) * s0_max * s1.abs();
+    // first with the cheap bound x_hi = 1/d₀, then with the tighter one
+    if d0_min > 0.0 && lhs_factor * (-rho * d0_min.ln()).exp() < rhs {
+        return true;
     }
-    (2.0 + rho) * s0_max * s1.abs() * x_hi.powf(rho) < s0sq_min + d0_min * d0_min
+    let x_hi = amplitude_bound(d0_min, a.d1.min(b.d1), a.eta);
+    x_hi.is_finite() && lhs_factor * x_hi.powf(rho) < rhs
 }
 
 fn point(r: &ForcedResponse, omega: f64, s: &SteadyState) -> SweepPoint {
@@ -138,13 +144,8 @@ fn fast_sweep(
         let guess = if guess.is_finite() { guess.min(t_max) } else { 0.0f64.min(t_max) };
         let t = eq.solve_unique(guess, t_max)?;
         let x = t.exp();
-        points.push(SweepPoint {
-            omega: w,
-            amplitude: x * r.scale,
-            phase: eq.phase(x),
-            stable: eq.is_stable(x),
-            sticking: false,
-        });
+        let (phase, stable) = eq.phase_and_stability(x);
+        points.push(SweepPoint { omega: w, amplitude: x * r.scale, phase, stable, sticking: false });
         hist = [Some((w, t)), hist[0]];
     }
     Some(points)
@@ -318,6 +319,22 @@ fn general_sweep(
                 }
                 None => from_rest(r, w, &roots),
             };
+            let mut j = j;
+            if !roots[j].stable {
+                // The followed state lost stability without a fold (Hopf,
+                // only possible for η < −2) or no fold was resolvable: the
+                // motion leaves it for the nearest stable state, if any.
+                let a = roots[j].amplitude.ln();
+                if let Some(q) = (0..roots.len())
+                    .filter(|&q| roots[q].stable)
+                    .min_by(|&p, &q| (roots[p].amplitude.ln() - a).abs().total_cmp(&(roots[q].amplitude.ln() - a).abs()))
+                {
+                    if rank.is_some() {
+                        jumps.push(Jump { omega: w, amplitude_before: roots[j].amplitude, amplitude_after: roots[q].amplitude });
+                    }
+                    j = q;
+                }
+            }
             rank = Some(j);
             points.push(point(r, w, &roots[j]));
         }

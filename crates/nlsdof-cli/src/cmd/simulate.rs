@@ -1,0 +1,246 @@
+//! `nlsdof simulate`: time-domain response of the model (Eq 32) to a
+//! recorded input acceleration, streamed to CSV `t,accel,x,v`.
+
+use crate::error::CliError;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use nlsdof::simulation::{simulate, Method, Options, Sample, State};
+use nlsdof::Model;
+use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// `--method` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Classical fixed-step RK4 driven by the samples (fast, streaming).
+    Rk4,
+    /// Adaptive Dormand-Prince 5(4), restarted at every sample (accuracy reference).
+    Dopri,
+}
+
+#[derive(clap::Args)]
+#[command(
+    about = "Simulate the model's response to a recorded input acceleration (CSV or MAT), writing t,accel,x,v",
+    after_long_help = SIMULATE_HELP
+)]
+pub struct Args {
+    /// Model file (TOML, SI units).
+    #[arg(long, value_name = "FILE")]
+    pub model: PathBuf,
+    /// Input acceleration: CSV `t,accel` or one column (with --fs), or a MATLAB .mat file.
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// Sampling frequency of a one-column input, Hz (> 0).
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    pub fs: Option<f64>,
+    /// Variable name in a .mat input (default: the only array, or `accel`).
+    #[arg(long, value_name = "NAME")]
+    pub var: Option<String>,
+    /// Integrator.
+    #[arg(long, value_enum, default_value_t = MethodArg::Rk4)]
+    pub method: MethodArg,
+    /// RK4 samples per step: 2 (default for uniform sampling) or 1 (piecewise-linear input; default for a non-uniform time column).
+    #[arg(long, value_name = "1|2")]
+    pub samples_per_step: Option<usize>,
+    /// Relative tolerance of --method dopri.
+    #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
+    pub rtol: f64,
+    /// Absolute tolerance of --method dopri (m; velocity uses atol * omega_n).
+    #[arg(long, default_value_t = 1e-13, allow_hyphen_values = true)]
+    pub atol: f64,
+    /// The input is a base acceleration: simulate the relative coordinate with u = -input.
+    #[arg(long)]
+    pub base: bool,
+    /// Initial displacement, m.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub x0: f64,
+    /// Initial velocity, m/s.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub v0: f64,
+    /// Write every N-th sample only.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub decimate: usize,
+    /// Output CSV (t,accel,x,v); written atomically, nothing on error or Ctrl-C.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
+    /// Print the run summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+const SIMULATE_HELP: &str = "MODEL (paper Eq 32, mass-normalised):
+  x'' = u(t) - (c x' + k x + c_e x'|x'|^eta + k_r x|x|^rho) / m
+  u = the input acceleration gamma(t) of Eq 29 (m gamma is the applied force). For a
+  base-excited structure in relative coordinates u = -(base acceleration): use --base.
+
+INPUT:
+  CSV with two columns t,accel (s, m/s^2; header optional; t strictly increasing), or
+  one column accel plus --fs HZ; or a MAT v5 file with an n x 2 [t accel] matrix or a
+  vector plus fs (--fs, a scalar variable `fs`, or a vector `t` of the same length).
+  NaN/Inf samples, non-increasing time, fs <= 0, an empty file or wrong columns are
+  errors (one line on stderr, exit 2, no output file).
+
+METHODS:
+  rk4   classical RK4. --samples-per-step 2: h = 2/fs, stage inputs exactly at the
+        samples (4th order for any smooth input through the samples); mid-step outputs
+        by cubic Hermite interpolation. --samples-per-step 1: h = 1/fs, input linear
+        between samples. Coulomb friction (eta = -1) always uses 1, with stick-slip
+        event location.
+  dopri adaptive Dormand-Prince 5(4), input linear between samples, restarted at every
+        sample (accuracy reference; about 1.5x the RHS evaluations of rk4 x1).
+
+OUTPUT:
+  --out FILE.csv: header t,accel,x,v (s, m/s^2 input as used, m, m/s), one row per
+  (decimated) sample. A one-line summary (or --json) goes to stdout.
+
+EXAMPLE:
+  nlsdof signal chirp --amplitude 0.25 --f0 4.5 --f1 6 --duration 300 --fs 2048 --out chirp.csv
+  nlsdof simulate --model examples/har-wing.toml --input chirp.csv --out response.csv";
+
+/// Loads a model file; a multi-line parse message is folded to one line.
+pub(crate) fn load_model(path: &Path) -> Result<Model, CliError> {
+    nlsdof_io::model_file::read_model(path).map_err(|e| {
+        let msg = e.to_string();
+        if msg.contains('\n') {
+            CliError::Usage(msg.split_whitespace().collect::<Vec<_>>().join(" "))
+        } else {
+            CliError::Io(e)
+        }
+    })
+}
+
+/// A progress bar that appears only once an operation has run for more
+/// than a second (and only on a terminal).
+pub(crate) struct Progress {
+    bar: ProgressBar,
+    start: Instant,
+    shown: AtomicBool,
+}
+
+impl Progress {
+    pub(crate) fn new(total: u64, what: &str) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% ({eta} left)")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(what.to_string());
+        Self { bar, start: Instant::now(), shown: AtomicBool::new(false) }
+    }
+
+    #[inline]
+    pub(crate) fn set(&self, pos: u64) {
+        self.bar.set_position(pos);
+        self.reveal();
+    }
+
+    #[inline]
+    pub(crate) fn inc(&self, n: u64) {
+        self.bar.inc(n);
+        self.reveal();
+    }
+
+    fn reveal(&self) {
+        if !self.shown.load(Ordering::Relaxed) && self.start.elapsed() > Duration::from_secs(1) {
+            self.shown.store(true, Ordering::Relaxed);
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+        }
+    }
+
+    pub(crate) fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+pub fn run(a: Args) -> Result<(), CliError> {
+    let t_start = Instant::now();
+    if a.decimate == 0 {
+        return Err(CliError::Usage("--decimate 0 is not allowed: give N >= 1 (write every N-th sample)".into()));
+    }
+    let model = load_model(&a.model)?;
+    let nm = model.normalised()?;
+    nlsdof::simulation::check_model(&nm)?;
+    let signal = read_signal(&a.input, a.fs, a.var.as_deref())?;
+    let input = signal.as_input()?.with_gain(if a.base { -1.0 } else { 1.0 })?;
+    let uniform = matches!(signal.grid, SignalGrid::Uniform { .. });
+    let method = match a.method {
+        MethodArg::Rk4 => {
+            let sps = a.samples_per_step.unwrap_or(if uniform { 2 } else { 1 });
+            Method::Rk4 { samples_per_step: sps }
+        }
+        MethodArg::Dopri => {
+            if a.samples_per_step.is_some() {
+                return Err(CliError::Usage("--samples-per-step applies to --method rk4 only".into()));
+            }
+            Method::DormandPrince { rtol: a.rtol, atol: a.atol }
+        }
+    };
+    let opts = Options { method, initial: State { x: a.x0, v: a.v0 }, decimation: a.decimate };
+    let mut out = CsvWriter::create(&a.out, &["t", "accel", "x", "v"])?;
+    let n = input.len() as u64;
+    let progress = Progress::new(n, "simulating");
+    let mut write_err = None;
+    let mut max_x = 0.0f64;
+    let t_sim = Instant::now();
+    let summary = simulate(&nm, &input, &opts, |s: Sample| {
+        if write_err.is_none() {
+            if let Err(e) = out.row(&[s.t, s.u, s.x, s.v]) {
+                write_err = Some(e);
+            }
+        }
+        max_x = max_x.max(s.x.abs());
+        if s.index & 0xffff == 0 {
+            progress.set(s.index as u64);
+        }
+    })?;
+    if let Some(e) = write_err {
+        return Err(e.into());
+    }
+    out.commit()?;
+    progress.finish();
+    let elapsed = t_sim.elapsed().as_secs_f64();
+    let method_name = match method {
+        Method::Rk4 { .. } => "rk4",
+        Method::DormandPrince { .. } => "dopri",
+    };
+    if a.json {
+        let v = json!({
+            "input": a.input,
+            "out": a.out,
+            "samples": summary.samples,
+            "outputs": summary.outputs,
+            "sampling": match &signal.grid {
+                SignalGrid::Uniform { fs, .. } => json!({"uniform": true, "fs_hz": fs}),
+                SignalGrid::Times(_) => json!({"uniform": false}),
+            },
+            "method": method_name,
+            "samples_per_step": summary.samples_per_step,
+            "steps": summary.steps,
+            "rejected_steps": summary.rejected_steps,
+            "rhs_evaluations": summary.rhs_evaluations,
+            "friction_events": summary.events,
+            "final": {"t": summary.final_time, "x": summary.final_state.x, "v": summary.final_state.v},
+            "max_abs_x": max_x,
+            "simulate_and_write_s": elapsed,
+            "total_s": t_start.elapsed().as_secs_f64(),
+        });
+        println!("{v}");
+    } else {
+        let sps = if summary.samples_per_step > 0 { format!(", {} sample(s)/step", summary.samples_per_step) } else { String::new() };
+        println!(
+            "simulated {} samples ({method_name}{sps}, {} steps, {} RHS evaluations{}) in {:.3} s; max |x| = {:.6e} m; wrote {} rows to {}",
+            summary.samples,
+            summary.steps,
+            summary.rhs_evaluations,
+            if summary.events > 0 { format!(", {} stick/slip events", summary.events) } else { String::new() },
+            elapsed,
+            max_x,
+            summary.outputs,
+            a.out.display()
+        );
+    }
+    Ok(())
+}

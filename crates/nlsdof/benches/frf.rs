@@ -37,6 +37,13 @@ fn bench(c: &mut Criterion) {
     c.bench_function("frf wing 5x200 sweep up (real exponents)", |b| {
         b.iter(|| frf(black_box(&wing), &wing_levels, 5.2, 5.6, SweepDirection::Up))
     });
+    let omegas: Vec<f64> = (0..200).map(|i| 2.0 * PI * (5.2 + 0.4 * i as f64 / 199.0)).collect();
+    c.bench_function("frf wing 5x200 sweep up, levels in parallel (sweep_levels)", |b| {
+        b.iter(|| {
+            sweep_levels(black_box(&wing), &wing_levels, &omegas, SweepDirection::Up, Formulation::HarmonicBalance)
+                .unwrap()
+        })
+    });
     let duff = duffing();
     let duff_levels = [0.25, 0.5, 1.0, 1.5, 2.0];
     c.bench_function("frf strong duffing 5x200 sweep up (jumps)", |b| {

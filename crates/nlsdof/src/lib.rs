@@ -36,7 +36,7 @@ pub mod stepped_sine;
 
 pub use error::{ParameterError, SolveError};
 pub use harmonic_balance::{
-    backbone, Formulation, ForcedResponse, Fold, Jump, NoMotion, PhaseQuadrature, RootSet,
+    backbone, sweep_levels, Formulation, ForcedResponse, Fold, Jump, NoMotion, PhaseQuadrature, RootSet,
     SteadyState, Sweep, SweepDirection, SweepPoint,
 };
 pub use model::{Model, NormalisedModel};

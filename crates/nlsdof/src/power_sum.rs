@@ -196,9 +196,27 @@ impl PowerSum {
         second: Option<Evaluator<'_>>,
     ) -> (Vec<f64>, Vec<f64>) {
         let mut out = Vec::new();
-        let mut crit = Vec::new();
-        self.roots_rec(lo, hi, top, second, &mut out, Some(&mut crit));
+        let mut levels = [Vec::new()];
+        self.roots_rec(lo, hi, top, second, &mut out, Some(&mut levels));
+        let [crit] = levels;
         (out, crit)
+    }
+
+    /// As [`Self::roots_in`], also returning the separating roots of the
+    /// next `levels.len()` reduced derivatives (level 1: critical points,
+    /// level 2: inflection points of `e^{−e₁t}F`, …), as far as the
+    /// recursion needed them.
+    pub fn roots_with_levels_in(
+        &self,
+        lo: f64,
+        hi: f64,
+        top: Option<Evaluator<'_>>,
+        second: Option<Evaluator<'_>>,
+        levels: &mut [Vec<f64>],
+    ) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.roots_rec(lo, hi, top, second, &mut out, Some(levels));
+        out
     }
 
     fn roots_rec(
@@ -208,7 +226,7 @@ impl PowerSum {
         top: Option<Evaluator<'_>>,
         second: Option<Evaluator<'_>>,
         out: &mut Vec<f64>,
-        crit_out: Option<&mut Vec<f64>>,
+        levels: Option<&mut [Vec<f64>]>,
     ) {
         if self.len() < 2 || lo >= hi || self.sign_changes() == 0 {
             return;
@@ -221,12 +239,19 @@ impl PowerSum {
         if self.sign_changes() >= 2 {
             let d = self.reduced_derivative();
             let mut crit = Vec::new();
-            d.roots_rec(lo, hi, second, None, &mut crit, None);
-            crit.retain(|&c| c > lo && c < hi);
-            points.extend(crit.iter().copied());
-            if let Some(c) = crit_out {
-                *c = crit;
+            match levels {
+                Some(lv) if !lv.is_empty() => {
+                    let (here, deeper) = lv.split_at_mut(1);
+                    d.roots_rec(lo, hi, second, None, &mut crit, Some(deeper));
+                    crit.retain(|&c| c > lo && c < hi);
+                    here[0] = crit.clone();
+                }
+                _ => {
+                    d.roots_rec(lo, hi, second, None, &mut crit, None);
+                    crit.retain(|&c| c > lo && c < hi);
+                }
             }
+            points.extend(crit.iter().copied());
         }
         points.push(hi);
         let mut vals: Vec<f64> = points.iter().map(|&t| f(t)).collect();

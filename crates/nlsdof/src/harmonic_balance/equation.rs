@@ -85,7 +85,13 @@ impl ResponseEquation {
     /// [`Self::phase`], [`Self::is_stable`]).
     #[inline]
     pub fn phase_and_stability(&self, x: f64) -> (f64, bool) {
-        let (s, d, st, dt) = self.parts(x.ln());
+        self.phase_and_stability_t(x.ln())
+    }
+
+    /// As [`Self::phase_and_stability`] at `t = ln x`.
+    #[inline]
+    pub fn phase_and_stability_t(&self, t: f64) -> (f64, bool) {
+        let (s, d, st, dt) = self.parts(t);
         let q = s * s + d * d;
         // sign of d ln P/dt = 2 + 2(S st + D dt)/q, scaled by q/2 > 0
         let slope_sign = q + s * st + d * dt;
@@ -156,6 +162,31 @@ impl ResponseEquation {
         let top = |t: f64| self.ln_p(t);
         let second = |t: f64| self.level1(t, e_min);
         Ok(ps.roots_and_critical_points_in(lo, hi, Some(&top), Some(&second)))
+    }
+
+    /// Roots, critical points and inflection points (all in `t = ln x`, as
+    /// far as the isolation needed them) with the values of `ln P` at the
+    /// critical points and of the (scaled) slope `d/dt[e^{−e_min t}(P−1)]`
+    /// at the inflection points. A fold is a critical point where
+    /// `ln P = 0`; a pair of critical points is born where the slope at an
+    /// inflection point touches zero. Used by the fold search.
+    pub fn fold_indicators(&self) -> Result<FoldIndicators, SolveError> {
+        let ps = self.power_sum();
+        if ps.sign_changes() == 0 {
+            return Ok(FoldIndicators::default());
+        }
+        let (lo, hi) = self.search_range(&ps)?;
+        let e_min = ps.exponents()[0];
+        let top = |t: f64| self.ln_p(t);
+        let second = |t: f64| self.level1(t, e_min);
+        let mut levels = [Vec::new(), Vec::new()];
+        let roots = ps.roots_with_levels_in(lo, hi, Some(&top), Some(&second), &mut levels);
+        let [crit, infl] = levels;
+        Ok(FoldIndicators {
+            roots,
+            critical: crit.into_iter().map(|t| (t, self.ln_p(t))).collect(),
+            inflection: infl.into_iter().map(|t| (t, self.level1(t, e_min))).collect(),
+        })
     }
 
     /// Critical points of `e^{−e_min t}(P − 1)` (in `t`) inside the root
@@ -255,6 +286,17 @@ impl ResponseEquation {
         }
         None
     }
+}
+
+/// See [`ResponseEquation::fold_indicators`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FoldIndicators {
+    /// Roots `t = ln x`.
+    pub roots: Vec<f64>,
+    /// `(t, ln P)` at each critical point.
+    pub critical: Vec<(f64, f64)>,
+    /// `(t, slope)` at each inflection point.
+    pub inflection: Vec<(f64, f64)>,
 }
 
 /// `ln(s² + d²)` without overflow.

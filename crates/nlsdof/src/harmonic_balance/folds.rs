@@ -13,13 +13,15 @@
 //! computed with the unexpanded (accurate) formula, so the fold frequency is
 //! found to ~1e-14 relative. Two folds inside one grid cell (a narrow
 //! hysteresis window near a cusp) are caught by refining every cell where
-//! a local extremum of `ln P` is closer to zero than its change across the
-//! cell.
+//! a local extremum of `ln P` — or, where no extremum exists at the cell
+//! ends, the slope of `ln P` at an inflection point — is closer to zero
+//! than 4× its change across the cell (refined 4-fold, up to 6 times:
+//! 1/4096 of a cell).
 
 use super::*;
 
 /// Cells of the coarse fold-search grid over the requested frequency range.
-pub const GRID: usize = 1024;
+pub const GRID: usize = 256;
 const MAX_REFINE_DEPTH: u32 = 6;
 
 struct Sample {
@@ -27,13 +29,25 @@ struct Sample {
     count: usize,
     /// (t, ln P) at each critical point.
     crit: Vec<(f64, f64)>,
+    /// (t, slope) at each inflection point.
+    infl: Vec<(f64, f64)>,
 }
 
 fn sample(r: &ForcedResponse, omega: f64) -> Result<Sample, SolveError> {
-    let eq = r.equation(omega);
-    let (roots, crit) = eq.roots_and_critical_points_t().map_err(|e| with_omega(e, omega))?;
-    let crit = crit.into_iter().map(|t| (t, eq.ln_p(t))).collect();
-    Ok(Sample { omega, count: roots.len(), crit })
+    let ind = r.equation(omega).fold_indicators().map_err(|e| with_omega(e, omega))?;
+    Ok(Sample { omega, count: ind.roots.len(), crit: ind.critical, infl: ind.inflection })
+}
+
+/// `true` if one of the paired values may cross zero twice inside the cell:
+/// it is closer to zero at an end than 4× its change across the cell.
+fn near_double_crossing(a: &[(f64, f64)], b: &[(f64, f64)]) -> bool {
+    if a.len() != b.len() {
+        return !(a.is_empty() && b.is_empty());
+    }
+    a.iter().zip(b).any(|(ca, cb)| {
+        let change = (ca.1 - cb.1).abs();
+        ca.1.abs().min(cb.1.abs()) < 4.0 * change && (ca.1 > 0.0) == (cb.1 > 0.0)
+    })
 }
 
 pub(crate) fn with_omega(e: SolveError, omega: f64) -> SolveError {
@@ -43,15 +57,12 @@ pub(crate) fn with_omega(e: SolveError, omega: f64) -> SolveError {
     }
 }
 
-/// A fold may hide in the cell (a, b) although the root counts agree.
+/// A fold may hide in the cell (a, b) although the root counts agree: a
+/// critical value `ln P` may cross zero twice (a narrow hysteresis window),
+/// or a pair of critical points may be born and die inside the cell (the
+/// slope at an inflection point touching zero, near a cusp).
 fn suspicious(a: &Sample, b: &Sample) -> bool {
-    if a.crit.len() != b.crit.len() {
-        return !(a.crit.is_empty() && b.crit.is_empty());
-    }
-    a.crit.iter().zip(&b.crit).any(|(ca, cb)| {
-        let change = (ca.1 - cb.1).abs();
-        ca.1.abs().min(cb.1.abs()) < 4.0 * change && (ca.1 > 0.0) == (cb.1 > 0.0)
-    })
+    near_double_crossing(&a.crit, &b.crit) || near_double_crossing(&a.infl, &b.infl)
 }
 
 fn locate(

@@ -379,3 +379,22 @@ pub fn modulation_frequencies(
     let half = disc.sqrt();
     Ok(Some((wn * (centre - half), wn * (centre + half))))
 }
+
+/// Stepped-sine sweeps of one model at several input levels `gammas`
+/// (m/s², zero-to-peak) over the same increasing frequencies `omegas`
+/// (rad/s), levels computed in parallel (rayon). Results are identical to
+/// calling [`ForcedResponse::sweep`] per level, in the order of `gammas`.
+pub fn sweep_levels(
+    model: &Model,
+    gammas: &[f64],
+    omegas: &[f64],
+    direction: SweepDirection,
+    formulation: Formulation,
+) -> Result<Vec<Sweep>, SolveError> {
+    use rayon::prelude::*;
+    let responses = gammas
+        .iter()
+        .map(|&g| ForcedResponse::new(model, g, formulation))
+        .collect::<Result<Vec<_>, _>>()?;
+    responses.par_iter().map(|r| r.sweep(omegas, direction)).collect()
+}

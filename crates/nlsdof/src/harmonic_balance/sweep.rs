@@ -131,22 +131,33 @@ fn fast_sweep(
     order: &[usize],
 ) -> Option<Vec<SweepPoint>> {
     let mut points = Vec::with_capacity(order.len());
-    let mut hist: [Option<(f64, f64)>; 2] = [None, None]; // (omega, t) of last two steps
-    for &i in order {
+    // (omega, t) of the last three steps, newest first
+    let mut hist: [(f64, f64); 3] = [(f64::NAN, f64::NAN); 3];
+    for (k, &i) in order.iter().enumerate() {
         let eq = &eqs[i];
         let w = omegas[i];
-        let t_max = eq.amplitude_bound().ln();
-        let guess = match hist {
-            [Some((w1, t1)), Some((w0, t0))] => t1 + (t1 - t0) * (w - w1) / (w1 - w0),
-            [Some((_, t1)), None] => t1,
-            _ => -0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln(),
+        // any valid upper bound on the root works; 1/d₀ is the cheapest
+        let t_max = if eq.d0 > 0.0 { -eq.d0.ln() } else { eq.amplitude_bound().ln() };
+        let guess = match k {
+            0 => -0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln(),
+            1 => hist[0].1,
+            2 => {
+                let [(w1, t1), (w0, t0), _] = hist;
+                t1 + (t1 - t0) * (w - w1) / (w1 - w0)
+            }
+            _ => {
+                // quadratic (Lagrange) extrapolation through the last three steps
+                let [(w2, t2), (w1, t1), (w0, t0)] = hist;
+                t2 * (w - w1) * (w - w0) / ((w2 - w1) * (w2 - w0))
+                    + t1 * (w - w2) * (w - w0) / ((w1 - w2) * (w1 - w0))
+                    + t0 * (w - w2) * (w - w1) / ((w0 - w2) * (w0 - w1))
+            }
         };
         let guess = if guess.is_finite() { guess.min(t_max) } else { 0.0f64.min(t_max) };
         let t = eq.solve_unique(guess, t_max)?;
-        let x = t.exp();
-        let (phase, stable) = eq.phase_and_stability(x);
-        points.push(SweepPoint { omega: w, amplitude: x * r.scale, phase, stable, sticking: false });
-        hist = [Some((w, t)), hist[0]];
+        let (phase, stable) = eq.phase_and_stability_t(t);
+        points.push(SweepPoint { omega: w, amplitude: t.exp() * r.scale, phase, stable, sticking: false });
+        hist = [(w, t), hist[0], hist[1]];
     }
     Some(points)
 }

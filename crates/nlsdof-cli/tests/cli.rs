@@ -232,11 +232,13 @@ fn frf_csv_header_and_rows() {
         "--steps", "37", "--csv",
     ]);
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines[0], "level,gamma,f_hz,amplitude,phase_deg");
+    assert_eq!(lines[0], "level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking");
     assert_eq!(lines.len(), 1 + 3 * 37);
     for (i, line) in lines[1..].iter().enumerate() {
-        let cols: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
-        assert_eq!(cols.len(), 5, "{line}");
+        let all: Vec<&str> = line.split(',').collect();
+        assert_eq!(all.len(), 8, "{line}");
+        assert_eq!(&all[5..], &["up", "true", "false"], "{line}");
+        let cols: Vec<f64> = all[..5].iter().map(|c| c.parse().unwrap()).collect();
         assert_eq!(cols[0] as usize, i / 37 + 1);
         assert_eq!(cols[1], [0.5, 1.0, 2.0][i / 37]);
         assert!(cols[2] >= 8.0 && cols[2] <= 16.0 && cols[3] > 0.0);

@@ -68,7 +68,7 @@ pub struct Args {
     /// Print JSON instead of the text summary.
     #[arg(long, conflicts_with = "csv")]
     pub json: bool,
-    /// Print CSV (level,gamma,f_hz,amplitude,phase_deg) instead of the text summary.
+    /// Print CSV (level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking) instead of the text summary.
     #[arg(long)]
     pub csv: bool,
     /// Also write an SVG plot of amplitude vs frequency to FILE.
@@ -99,8 +99,9 @@ OUTPUT:
         \"stable\":..,\"sticking\":..}}],\"jumps\":[{{\"f_hz\":..,\"amplitude_before\":..,\"amplitude_after\":..}}],
         \"folds_hz\":[..],\"phase_quadrature\":{{\"f_hz\":..,\"amplitude\":..}} or null}}]}}
         points are in sweep order (decreasing frequency for --sweep down)
-  --csv: header `level,gamma,f_hz,amplitude,phase_deg`, then one row per swept point
-        (level = 1-based index in the --gamma list), points in sweep order
+  --csv: header `level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking`, then one row
+        per swept point (level = 1-based index in the --gamma list), points in sweep order;
+        a sticking point (Coulomb friction holds the mass) has amplitude 0 and an empty phase
   --plot FILE.svg: amplitude vs frequency, one colour per level; stable branches solid,
         unstable dashed, backbone dotted grey, swept points as markers, jumps as arrows.
         The plot is written atomically: on any error no file is created.
@@ -273,11 +274,31 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
     format!("{out}\n")
 }
 
+/// CSV rows; the first five columns are the contract, `sweep` matches the
+/// stepped-sine data format read by the fitting commands, `stable` and
+/// `sticking` flag each point. A sticking point (no steady motion) has
+/// amplitude 0 and an empty phase (there is no phase to report).
 fn csv_output(levels: &[Level]) -> String {
-    let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg\n");
+    let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking\n");
     for (i, l) in levels.iter().enumerate() {
+        let sweep = match l.sweep.direction {
+            nlsdof::SweepDirection::Up => "up",
+            nlsdof::SweepDirection::Down => "down",
+        };
         for p in &l.sweep.points {
-            let _ = writeln!(s, "{},{},{},{},{}", i + 1, l.gamma, hz(p.omega), p.amplitude, p.phase.to_degrees());
+            let phase = if p.sticking { String::new() } else { format!("{}", p.phase.to_degrees()) };
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{},{}",
+                i + 1,
+                l.gamma,
+                hz(p.omega),
+                p.amplitude,
+                phase,
+                sweep,
+                p.stable,
+                p.sticking
+            );
         }
     }
     s

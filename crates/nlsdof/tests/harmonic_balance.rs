@@ -539,3 +539,73 @@ fn narrow_hysteresis_window_near_the_cusp_is_found() {
         assert!((f.omega - w).abs() <= 1e-10 * w, "{} vs {}", f.omega, w);
     }
 }
+
+/// Independent oracle for the stability flags: integrate the averaged
+/// (slow-flow) equations dX/dτ = −i(1 − Z(|X|)X), Z = S + iD, from a small
+/// perturbation of each steady state (X* = x e^{−iφ}) and see whether it
+/// returns (stable) or leaves (unstable).
+fn slow_flow_returns(eq: &nlsdof::harmonic_balance::ResponseEquation, x: f64, phase: f64, kick: (f64, f64)) -> bool {
+    let z = |re: f64, im: f64| {
+        let a = re.hypot(im);
+        (eq.s0 + eq.s1 * a.powf(eq.rho), eq.d0 + eq.d1 * a.powf(eq.eta))
+    };
+    let f = |re: f64, im: f64| {
+        let (s, d) = z(re, im);
+        let (ur, ui) = (1.0 - (s * re - d * im), -(s * im + d * re));
+        (ui, -ur)
+    };
+    let (x0r, x0i) = (x * phase.cos(), -x * phase.sin());
+    let (mut re, mut im) = (x0r * (1.0 + kick.0), x0i * (1.0 + kick.0) + x * kick.1);
+    let d0 = ((re - x0r).hypot(im - x0i)) / x;
+    // time scale: 1/|Z|, decay ~ D; integrate many decay times
+    let (s, d) = z(re, im);
+    let h = 0.02 / s.hypot(d).max(1.0).max(1.0 / x);
+    let steps = ((200.0 / d.abs().max(1e-3)) / h).min(2e6) as usize;
+    for _ in 0..steps {
+        let (k1r, k1i) = f(re, im);
+        let (k2r, k2i) = f(re + 0.5 * h * k1r, im + 0.5 * h * k1i);
+        let (k3r, k3i) = f(re + 0.5 * h * k2r, im + 0.5 * h * k2i);
+        let (k4r, k4i) = f(re + h * k3r, im + h * k3i);
+        re += h / 6.0 * (k1r + 2.0 * k2r + 2.0 * k3r + k4r);
+        im += h / 6.0 * (k1i + 2.0 * k2i + 2.0 * k3i + k4i);
+        if ((re - x0r).hypot(im - x0i)) / x > 0.5 {
+            return false;
+        }
+    }
+    ((re - x0r).hypot(im - x0i)) / x < 0.1 * d0
+}
+
+#[test]
+fn stability_flags_agree_with_slow_flow_integration() {
+    let mut checked = (0, 0);
+    // hardening Duffing inside the hysteresis band: stable, unstable, stable
+    let m = duffing();
+    let r = ForcedResponse::new(&m, 1.0, Formulation::HarmonicBalance).unwrap();
+    let folds = r.folds(2.0 * PI * 8.0, 2.0 * PI * 22.0).unwrap();
+    for frac in [0.2, 0.5, 0.8] {
+        let w = folds[0].omega + frac * (folds[1].omega - folds[0].omega);
+        let eq = r.equation(w);
+        let set = r.steady_states(w).unwrap();
+        assert_eq!(set.roots.len(), 3);
+        for s in &set.roots {
+            let x = s.amplitude / (1.0 / m.omega_n().powi(2));
+            let back = slow_flow_returns(&eq, x, s.phase, (1e-3, 1e-3)) && slow_flow_returns(&eq, x, s.phase, (-1e-3, 0.0));
+            assert_eq!(back, s.stable, "Duffing w={w} root {s:?}");
+            if s.stable { checked.0 += 1 } else { checked.1 += 1 }
+        }
+    }
+    // η = −2.5: Hopf instability without a fold
+    let m = Model::linear(1.0, 1000.0, 0.5).unwrap().with_damping(0.05, -2.5).unwrap();
+    let r = ForcedResponse::new(&m, 5.0, Formulation::HarmonicBalance).unwrap();
+    for f_hz in [4.0, 5.0, 6.0] {
+        let w = 2.0 * PI * f_hz;
+        let eq = r.equation(w);
+        for s in &r.steady_states(w).unwrap().roots {
+            let x = s.amplitude / (5.0 / m.omega_n().powi(2));
+            let back = slow_flow_returns(&eq, x, s.phase, (1e-3, 1e-3)) && slow_flow_returns(&eq, x, s.phase, (-1e-3, 0.0));
+            assert_eq!(back, s.stable, "eta=-2.5 f={f_hz} root {s:?}");
+            if s.stable { checked.0 += 1 } else { checked.1 += 1 }
+        }
+    }
+    assert!(checked.0 >= 6 && checked.1 >= 4, "{checked:?}");
+}

@@ -240,6 +240,69 @@ impl ResponseEquation {
         slope > 0.0 && 2.0 * d + dt > 0.0
     }
 
+    /// As [`Self::solve_unique`], also returning phase and stability at the
+    /// root. When the last Newton step `δ` is accepted without another
+    /// evaluation (|δ| < 1e-9), the power terms of that last evaluation are
+    /// carried to the root by `e^{−ρδ} ≈ 1 − ρδ + (ρδ)²/2` (relative error
+    /// < (ρδ)³/6 ≈ 1e-27), so no further transcendental calls are needed.
+    pub fn solve_unique_state(&self, t0: f64, t_max: f64) -> Option<UniqueState> {
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, t_max);
+        let mut t = t0.min(t_max);
+        for _ in 0..60 {
+            let sr = if self.s1 == 0.0 { 0.0 } else { self.s1 * (self.rho * t).exp() };
+            let de = if self.d1 == 0.0 { 0.0 } else { self.d1 * (self.eta * t).exp() };
+            let (s, d) = (self.s0 + sr, self.d0 + de);
+            let (st, dt) = (self.rho * sr, self.eta * de);
+            let q = s * s + d * d;
+            let (f, fp) = if s.abs() < 1e150 && d.abs() < 1e150 {
+                (2.0 * t + q.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
+            } else {
+                let h = s.hypot(d);
+                (2.0 * t + 2.0 * h.ln(), 2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)))
+            };
+            if f == 0.0 {
+                return Some(self.state_from_terms(t, sr, de));
+            }
+            if f < 0.0 {
+                lo = lo.max(t);
+            } else {
+                hi = hi.min(t);
+            }
+            let step = f / fp;
+            let mut next = t - step;
+            if fp > 0.0 && step.abs() < 1e-9 && next > lo && next < hi {
+                let shift = |e: f64| {
+                    let u = e * step;
+                    1.0 - u + 0.5 * u * u
+                };
+                return Some(self.state_from_terms(next, sr * shift(self.rho), de * shift(self.eta)));
+            }
+            if !(fp > 0.0) || !next.is_finite() || next <= lo || next >= hi {
+                next = if lo.is_finite() && hi.is_finite() {
+                    0.5 * (lo + hi)
+                } else if lo.is_finite() {
+                    lo + 1.0
+                } else {
+                    hi - 1.0
+                };
+            }
+            if (next - t).abs() <= 4.0 * f64::EPSILON * (1.0 + t.abs()) {
+                let (phase, stable) = self.phase_and_stability_t(next);
+                return Some(UniqueState { t: next, phase, stable });
+            }
+            t = next;
+        }
+        None
+    }
+
+    #[inline]
+    fn state_from_terms(&self, t: f64, sr: f64, de: f64) -> UniqueState {
+        let (s, d) = (self.s0 + sr, self.d0 + de);
+        let (st, dt) = (self.rho * sr, self.eta * de);
+        let slope_sign = s * s + d * d + s * st + d * dt;
+        UniqueState { t, phase: d.atan2(s), stable: slope_sign > 0.0 && 2.0 * d + dt > 0.0 }
+    }
+
     /// Upper bound on every root: `P ≥ x² d₀²` and `P ≥ x^{2+2η} d₁²`
     /// (valid when `d₀, d₁ ≥ 0`), so roots satisfy `x ≤ 1/d₀` and
     /// `x ≤ d₁^{−1/(1+η)}` (η > −1). `∞` if neither applies.
@@ -286,6 +349,17 @@ impl ResponseEquation {
         }
         None
     }
+}
+
+/// Steady state from [`ResponseEquation::solve_unique_state`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UniqueState {
+    /// `t = ln x` of the root.
+    pub t: f64,
+    /// Phase lag (rad).
+    pub phase: f64,
+    /// Slow-flow stability.
+    pub stable: bool,
 }
 
 /// See [`ResponseEquation::fold_indicators`].
@@ -358,6 +432,19 @@ mod tests {
         assert!(eq.roots().unwrap().is_empty());
         let eq = ResponseEquation::new(0.5, 0.0, 0.0, 0.1, 0.8, -1.0);
         assert_eq!(eq.roots().unwrap().len(), 1);
+    }
+
+    #[test]
+    fn unique_state_matches_direct_evaluation() {
+        let eq = ResponseEquation::new(-0.02, 3e-4, 4.0022, 0.0129, 2e-6, 3.03099);
+        for t0 in [-3.0, 0.0, 2.0, 4.0] {
+            let st = eq.solve_unique_state(t0, eq.amplitude_bound().ln()).unwrap();
+            let t = eq.solve_unique(t0, eq.amplitude_bound().ln()).unwrap();
+            assert!((st.t - t).abs() < 1e-14);
+            let (ph, stable) = eq.phase_and_stability_t(st.t);
+            assert!((st.phase - ph).abs() < 1e-15, "{} vs {}", st.phase, ph);
+            assert_eq!(st.stable, stable);
+        }
     }
 
     #[test]

@@ -30,7 +30,7 @@
 //! there are no folds, and each step is a safeguarded Newton solve warm
 //! started from the previous step.
 
-use super::equation::{amplitude_bound, ResponseEquation};
+use super::equation::{amplitude_bound, ResponseEquation, UniqueState};
 use super::folds::{find_folds, with_omega};
 use super::*;
 
@@ -154,8 +154,7 @@ fn fast_sweep(
             }
         };
         let guess = if guess.is_finite() { guess.min(t_max) } else { 0.0f64.min(t_max) };
-        let t = eq.solve_unique(guess, t_max)?;
-        let (phase, stable) = eq.phase_and_stability_t(t);
+        let UniqueState { t, phase, stable } = eq.solve_unique_state(guess, t_max)?;
         points.push(SweepPoint { omega: w, amplitude: t.exp() * r.scale, phase, stable, sticking: false });
         hist = [(w, t), hist[0], hist[1]];
     }

@@ -15,6 +15,12 @@ pub enum CliError {
     Simulation(#[from] nlsdof::simulation::SimulationError),
     #[error(transparent)]
     Signal(#[from] nlsdof_io::signal_file::SignalFileError),
+    #[error(transparent)]
+    Identification(#[from] nlsdof::vector_fitting::IdentificationError),
+    #[error(transparent)]
+    SignalProcessing(#[from] nlsdof::signal_processing::SignalError),
+    #[error(transparent)]
+    FrfFile(#[from] nlsdof_io::frf_file::FrfFileError),
     /// A bad command-line value: what was given and what is allowed.
     #[error("{0}")]
     Usage(String),

@@ -35,6 +35,16 @@ enum Command {
     SteppedSine(cmd::stepped_sine::Args),
     /// Make an input signal (CSV t,accel): sine, chirp or stepped sine.
     Signal(cmd::signal::Args),
+    /// Fit a power-law model to stepped-sine amplitude curves at several input levels (Eq 31).
+    Fit(cmd::fit::Args),
+    /// Fit several models to one data set and compare them (Tables 5-8 analogue).
+    Compare(cmd::compare::Args),
+    /// Estimate an FRF (H1, H2 with coherence, or spectral ratio) from input/output time histories.
+    #[command(name = "frf-estimate")]
+    FrfEstimate(cmd::frf_estimate::Args),
+    /// Identify the linear part (m, c, k or k/m, c/m) from a measured FRF by fast relaxed vector fitting.
+    #[command(name = "linear-id")]
+    LinearId(cmd::linear_id::Args),
 }
 
 fn main() {
@@ -47,7 +57,10 @@ fn main() {
     let cli = Cli::try_parse().unwrap_or_else(|e| {
         use clap::error::ErrorKind as K;
         if !e.use_stderr()
-            || matches!(e.kind(), K::DisplayHelp | K::DisplayVersion | K::DisplayHelpOnMissingArgumentOrSubcommand)
+            || matches!(
+                e.kind(),
+                K::DisplayHelp | K::DisplayVersion | K::DisplayHelpOnMissingArgumentOrSubcommand
+            )
         {
             e.exit();
         }
@@ -56,7 +69,9 @@ fn main() {
         let parts: Vec<&str> = text
             .lines()
             .map(|l| l.trim().trim_start_matches("error: "))
-            .filter(|l| !l.is_empty() && !l.starts_with("For more information") && !l.starts_with("Usage:"))
+            .filter(|l| {
+                !l.is_empty() && !l.starts_with("For more information") && !l.starts_with("Usage:")
+            })
             .collect();
         let mut msg = String::new();
         for p in parts {
@@ -75,6 +90,10 @@ fn main() {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::SteppedSine(a) => cmd::stepped_sine::run(a),
         Command::Signal(a) => cmd::signal::run(a),
+        Command::Fit(a) => cmd::fit::run(a),
+        Command::Compare(a) => cmd::compare::run(a),
+        Command::FrfEstimate(a) => cmd::frf_estimate::run(a),
+        Command::LinearId(a) => cmd::linear_id::run(a),
     };
     if let Err(e) = result {
         eprintln!("nlsdof: error: {e}");

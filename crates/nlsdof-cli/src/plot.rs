@@ -87,16 +87,29 @@ fn merge(segments: Vec<Segment>) -> Vec<Polyline> {
             lines[idx].points.push(p1);
             open.insert(key(p1, stable), idx);
         } else {
-            lines.push(Polyline { points: vec![p0, p1], stable });
+            lines.push(Polyline {
+                points: vec![p0, p1],
+                stable,
+            });
             open.insert(key(p1, stable), lines.len() - 1);
         }
     }
     lines
 }
 
-fn connect_rankwise(fa: f64, a: &[SteadyState], fb: f64, b: &[SteadyState], out: &mut Vec<Segment>) {
+fn connect_rankwise(
+    fa: f64,
+    a: &[SteadyState],
+    fb: f64,
+    b: &[SteadyState],
+    out: &mut Vec<Segment>,
+) {
     for (ra, rb) in a.iter().zip(b) {
-        out.push(((fa, ra.amplitude), (fb, rb.amplitude), ra.stable && rb.stable));
+        out.push((
+            (fa, ra.amplitude),
+            (fb, rb.amplitude),
+            ra.stable && rb.stable,
+        ));
     }
 }
 
@@ -119,7 +132,9 @@ pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<Polyline>, 
     for w in samples.windows(2) {
         let (fa, ra) = (&w[0].0, &w[0].1);
         let (fb, rb) = (&w[1].0, &w[1].1);
-        let inside: Vec<usize> = (0..folds.len()).filter(|&k| fold_hz[k] > *fa && fold_hz[k] < *fb).collect();
+        let inside: Vec<usize> = (0..folds.len())
+            .filter(|&k| fold_hz[k] > *fa && fold_hz[k] < *fb)
+            .collect();
         match inside.len() {
             0 if ra.len() == rb.len() => connect_rankwise(*fa, ra, *fb, rb, &mut segments),
             1 if ra.len().abs_diff(rb.len()) == 2 => {
@@ -254,7 +269,12 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
     }
     let (unit, scale) = amplitude_unit(a_max);
     // At most ~MAX_MARKERS markers per level, so they do not bury the curves.
-    let n_points = p.levels.iter().map(|l| l.sweep.points.len()).max().unwrap_or(0);
+    let n_points = p
+        .levels
+        .iter()
+        .map(|l| l.sweep.points.len())
+        .max()
+        .unwrap_or(0);
     let marker_step = n_points.div_ceil(MAX_MARKERS).max(1);
     let y_top = a_max * 1.08 * scale;
     let backbone = backbone_runs(p, a_max * 1.08);
@@ -302,7 +322,9 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
             for pl in lines {
                 let pts = pl.points.iter().map(|&(f, a)| (f, a * scale));
                 if pl.stable {
-                    chart.draw_series(LineSeries::new(pts, c.stroke_width(2))).map_err(plot_err)?;
+                    chart
+                        .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+                        .map_err(plot_err)?;
                 } else {
                     chart
                         .draw_series(DashedLineSeries::new(pts, 7, 5, c.stroke_width(2)))
@@ -311,7 +333,11 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
             }
             chart
                 .draw_series(l.sweep.points.iter().step_by(marker_step).map(|pt| {
-                    Circle::new((pt.omega / (2.0 * PI), pt.amplitude * scale), 2, c.stroke_width(1))
+                    Circle::new(
+                        (pt.omega / (2.0 * PI), pt.amplitude * scale),
+                        2,
+                        c.stroke_width(1),
+                    )
                 }))
                 .map_err(plot_err)?;
         }
@@ -329,7 +355,11 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
         // Legend panel.
         let text = |s: &str, x: i32, y: i32, size: u32| -> Result<(), CliError> {
             right
-                .draw(&Text::new(s.to_string(), (x, y), ("sans-serif", size).into_font().color(&BLACK)))
+                .draw(&Text::new(
+                    s.to_string(),
+                    (x, y),
+                    ("sans-serif", size).into_font().color(&BLACK),
+                ))
                 .map_err(plot_err)
         };
         let mut y = 40;
@@ -354,26 +384,46 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
             } else {
                 "  (no motion in part)"
             };
-            text(&format!("γ = {}{note}", l.gamma), 54, y - font as i32 / 2 - 1, font)?;
+            text(
+                &format!("γ = {}{note}", l.gamma),
+                54,
+                y - font as i32 / 2 - 1,
+                font,
+            )?;
             y += row;
         }
         y += 14;
         right
-            .draw(&PathElement::new(vec![(14, y), (44, y)], BLACK.stroke_width(2)))
+            .draw(&PathElement::new(
+                vec![(14, y), (44, y)],
+                BLACK.stroke_width(2),
+            ))
             .map_err(plot_err)?;
         text("stable branch", 54, y - 8, 13)?;
         y += 22;
         right
-            .draw(&DashedPathElement::new(vec![(14, y), (44, y)], 7, 5, BLACK.stroke_width(2)))
+            .draw(&DashedPathElement::new(
+                vec![(14, y), (44, y)],
+                7,
+                5,
+                BLACK.stroke_width(2),
+            ))
             .map_err(plot_err)?;
         text("unstable branch", 54, y - 8, 13)?;
         y += 22;
         right
-            .draw(&DashedPathElement::new(vec![(14, y), (44, y)], 2, 4, GREY.stroke_width(2)))
+            .draw(&DashedPathElement::new(
+                vec![(14, y), (44, y)],
+                2,
+                4,
+                GREY.stroke_width(2),
+            ))
             .map_err(plot_err)?;
         text("backbone", 54, y - 8, 13)?;
         y += 22;
-        right.draw(&Circle::new((29, y), 2, BLACK.stroke_width(1))).map_err(plot_err)?;
+        right
+            .draw(&Circle::new((29, y), 2, BLACK.stroke_width(1)))
+            .map_err(plot_err)?;
         let dir = match p.direction {
             SweepDirection::Up => "up",
             SweepDirection::Down => "down",
@@ -381,7 +431,12 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
         text(&format!("swept points (sweep {dir})"), 54, y - 8, 13)?;
         if marker_step > 1 {
             y += 16;
-            text(&format!("(1 of every {marker_step} of {n_points} points)"), 54, y - 8, 12)?;
+            text(
+                &format!("(1 of every {marker_step} of {n_points} points)"),
+                54,
+                y - 8,
+                12,
+            )?;
         }
         y += 30;
         let (ox, oy) = right.get_base_pixel();
@@ -403,11 +458,17 @@ fn draw_arrow<DB: DrawingBackend>(
     let head = 9.min(len);
     let dir = dy.signum();
     let base = to.1 - dir * head;
-    root.draw(&PathElement::new(vec![from, (to.0, base)], c.stroke_width(2)))
-        .map_err(plot_err)?;
+    root.draw(&PathElement::new(
+        vec![from, (to.0, base)],
+        c.stroke_width(2),
+    ))
+    .map_err(plot_err)?;
     if head > 0 {
-        root.draw(&Polygon::new(vec![(to.0 - 5, base), (to.0 + 5, base), to], c.filled()))
-            .map_err(plot_err)?;
+        root.draw(&Polygon::new(
+            vec![(to.0 - 5, base), (to.0 + 5, base), to],
+            c.filled(),
+        ))
+        .map_err(plot_err)?;
     }
     Ok(())
 }
@@ -418,7 +479,10 @@ mod tests {
     use nlsdof::{ForcedResponse, Model};
 
     fn duffing() -> Model {
-        Model::linear(1.0, 3947.84, 1.2566).unwrap().with_stiffness(1.2e7, 2.0).unwrap()
+        Model::linear(1.0, 3947.84, 1.2566)
+            .unwrap()
+            .with_stiffness(1.2e7, 2.0)
+            .unwrap()
     }
 
     fn level(model: &Model, gamma: f64, f_min: f64, f_max: f64, steps: usize) -> Level {
@@ -428,7 +492,12 @@ mod tests {
             .collect();
         let sweep = response.sweep(&omegas, SweepDirection::Up).unwrap();
         let phase_quadrature = response.phase_quadrature().unwrap();
-        Level { gamma, response, sweep, phase_quadrature }
+        Level {
+            gamma,
+            response,
+            sweep,
+            phase_quadrature,
+        }
     }
 
     #[test]
@@ -450,8 +519,14 @@ mod tests {
             assert!(touching.iter().any(|p| p.stable) && touching.iter().any(|p| !p.stable));
         }
         for p in &lines {
-            assert!(p.points.windows(2).all(|w| w[1].0 > w[0].0), "increasing frequency");
-            assert!(p.points.iter().all(|&(f, a)| (8.0..=16.0).contains(&f) && a > 0.0));
+            assert!(
+                p.points.windows(2).all(|w| w[1].0 > w[0].0),
+                "increasing frequency"
+            );
+            assert!(p
+                .points
+                .iter()
+                .all(|&(f, a)| (8.0..=16.0).contains(&f) && a > 0.0));
         }
     }
 
@@ -474,14 +549,20 @@ mod tests {
         let run = &runs[0];
         assert!((run[0].0 - model.omega_n() / (2.0 * PI)).abs() < 1e-9 && run[0].1 == 0.0);
         let last = run.last().unwrap();
-        assert!((last.0 - 12.0).abs() < 1e-12, "ends on the band edge: {last:?}");
+        assert!(
+            (last.0 - 12.0).abs() < 1e-12,
+            "ends on the band edge: {last:?}"
+        );
         assert!(run.iter().all(|&(f, _)| (8.0..=12.0).contains(&f)));
     }
 
     #[test]
     fn svg_has_axes_legend_and_arrows() {
         let model = duffing();
-        let levels = [level(&model, 1.0, 8.0, 16.0, 40), level(&model, 2.0, 8.0, 16.0, 40)];
+        let levels = [
+            level(&model, 1.0, 8.0, 16.0, 40),
+            level(&model, 2.0, 8.0, 16.0, 40),
+        ];
         let p = FrfPlot {
             title: "duffing".into(),
             model: model.normalised().unwrap(),
@@ -493,7 +574,14 @@ mod tests {
         };
         let svg = render_frf(&p).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        for want in ["Frequency f [Hz]", "Amplitude a [mm], zero-to-peak", "γ = 1", "γ = 2", "jump", "backbone"] {
+        for want in [
+            "Frequency f [Hz]",
+            "Amplitude a [mm], zero-to-peak",
+            "γ = 1",
+            "γ = 2",
+            "jump",
+            "backbone",
+        ] {
             assert!(svg.contains(want), "missing {want}");
         }
         // two jump arrows + the legend arrow, each with a filled head

@@ -33,12 +33,25 @@ pub struct AtomicFile {
 
 impl AtomicFile {
     pub fn create(target: &Path) -> Result<Self, IoError> {
-        let dir = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let dir = target
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let name = target
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let tmp = dir.join(format!(".{name}.{}.partial", std::process::id()));
-        let f = File::create(&tmp).map_err(|source| IoError::Write { path: target.to_path_buf(), source })?;
+        let f = File::create(&tmp).map_err(|source| IoError::Write {
+            path: target.to_path_buf(),
+            source,
+        })?;
         LIVE.lock().map(|mut l| l.push(tmp.clone())).ok();
-        Ok(Self { target: target.to_path_buf(), tmp, writer: Some(BufWriter::with_capacity(1 << 20, f)) })
+        Ok(Self {
+            target: target.to_path_buf(),
+            tmp,
+            writer: Some(BufWriter::with_capacity(1 << 20, f)),
+        })
     }
 
     pub fn writer(&mut self) -> &mut BufWriter<File> {
@@ -48,10 +61,16 @@ impl AtomicFile {
     /// Flushes and renames the temporary over the target.
     pub fn commit(mut self) -> Result<(), IoError> {
         let w = self.writer.take().expect("writer present until commit");
-        let f = w.into_inner().map_err(|e| IoError::Write { path: self.target.clone(), source: e.into_error() })?;
+        let f = w.into_inner().map_err(|e| IoError::Write {
+            path: self.target.clone(),
+            source: e.into_error(),
+        })?;
         f.sync_all().ok();
         drop(f);
-        std::fs::rename(&self.tmp, &self.target).map_err(|source| IoError::Write { path: self.target.clone(), source })?;
+        std::fs::rename(&self.tmp, &self.target).map_err(|source| IoError::Write {
+            path: self.target.clone(),
+            source,
+        })?;
         LIVE.lock().map(|mut l| l.retain(|p| p != &self.tmp)).ok();
         Ok(())
     }
@@ -79,7 +98,10 @@ impl Drop for AtomicFile {
 /// Writes `bytes` to `target` atomically.
 pub fn write_atomic(target: &Path, bytes: &[u8]) -> Result<(), IoError> {
     let mut f = AtomicFile::create(target)?;
-    f.write_all(bytes).map_err(|source| IoError::Write { path: target.to_path_buf(), source })?;
+    f.write_all(bytes).map_err(|source| IoError::Write {
+        path: target.to_path_buf(),
+        source,
+    })?;
     f.commit()
 }
 

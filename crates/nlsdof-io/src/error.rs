@@ -6,13 +6,26 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum IoError {
     #[error("cannot read {path}: {source}")]
-    Read { path: PathBuf, source: std::io::Error },
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("cannot write {path}: {source}")]
-    Write { path: PathBuf, source: std::io::Error },
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Parse { path: PathBuf, message: String },
     #[error("{path}: {source}")]
-    Invalid { path: PathBuf, source: nlsdof::ParameterError },
+    Invalid {
+        path: PathBuf,
+        source: nlsdof::ParameterError,
+    },
     #[error("{path}: line {line}: {message}")]
-    Data { path: PathBuf, line: usize, message: String },
+    Data {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
 }

@@ -7,10 +7,15 @@
 //!   Ctrl-C never leaves a partial file behind.
 //! * [`signal_file`] — recorded input signals (CSV `t,accel` or one column
 //!   plus fs; MATLAB MAT v5 numeric arrays) and streamed numeric CSV output.
+//! * [`frf_file`] — FRF tables (CSV `f_hz,re,im` or `f_hz,mag[,phase_deg]`),
+//!   multi-channel time histories (CSV, Polytec ASCII exports) and Polytec
+//!   swept-sine FRF exports, for linear identification.
 
 pub mod atomic;
 pub mod error;
+pub mod frf_file;
 pub mod model_file;
 pub mod signal_file;
+pub mod stepped_sine_data;
 
 pub use error::IoError;

@@ -40,7 +40,12 @@ pub struct ModelFile {
 
 impl From<&Model> for ModelFile {
     fn from(m: &Model) -> Self {
-        let t = |p: Option<PowerLaw>| p.map(|p| TermFile { coefficient: p.coefficient, exponent: p.exponent });
+        let t = |p: Option<PowerLaw>| {
+            p.map(|p| TermFile {
+                coefficient: p.coefficient,
+                exponent: p.exponent,
+            })
+        };
         ModelFile {
             mass: m.mass,
             stiffness: m.stiffness,
@@ -54,7 +59,12 @@ impl From<&Model> for ModelFile {
 impl ModelFile {
     /// Converts to a validated [`Model`].
     pub fn to_model(&self) -> Result<Model, nlsdof::ParameterError> {
-        let t = |p: &Option<TermFile>| p.as_ref().map(|p| PowerLaw { coefficient: p.coefficient, exponent: p.exponent });
+        let t = |p: &Option<TermFile>| {
+            p.as_ref().map(|p| PowerLaw {
+                coefficient: p.coefficient,
+                exponent: p.exponent,
+            })
+        };
         let m = Model {
             mass: self.mass,
             stiffness: self.stiffness,
@@ -73,13 +83,18 @@ pub fn parse_model(text: &str, path: &Path) -> Result<Model, IoError> {
         path: path.to_path_buf(),
         message: e.message().to_string(),
     })?;
-    file.to_model().map_err(|source| IoError::Invalid { path: path.to_path_buf(), source })
+    file.to_model().map_err(|source| IoError::Invalid {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Reads and validates a model file.
 pub fn read_model(path: &Path) -> Result<Model, IoError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| IoError::Read { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| IoError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse_model(&text, path)
 }
 
@@ -120,13 +135,28 @@ mod tests {
     #[test]
     fn rejects_bad_models() {
         let p = Path::new("bad.toml");
-        assert!(matches!(parse_model("mass = -1.0\nstiffness = 1.0\ndamping = 0.0", p), Err(IoError::Invalid { .. })));
-        assert!(matches!(parse_model("mass = 1.0\nstiffness = 1.0", p), Err(IoError::Parse { .. })));
-        assert!(matches!(parse_model("mass = 1.0\nstiffness = 1.0\ndamping = 0.0\nstifness = 2.0", p), Err(IoError::Parse { .. })));
+        assert!(matches!(
+            parse_model("mass = -1.0\nstiffness = 1.0\ndamping = 0.0", p),
+            Err(IoError::Invalid { .. })
+        ));
+        assert!(matches!(
+            parse_model("mass = 1.0\nstiffness = 1.0", p),
+            Err(IoError::Parse { .. })
+        ));
+        assert!(matches!(
+            parse_model(
+                "mass = 1.0\nstiffness = 1.0\ndamping = 0.0\nstifness = 2.0",
+                p
+            ),
+            Err(IoError::Parse { .. })
+        ));
         assert!(matches!(
             parse_model("mass = 1.0\nstiffness = 1.0\ndamping = 0.0\n[nonlinear_damping]\ncoefficient = 1.0\nexponent = -3.0", p),
             Err(IoError::Invalid { .. })
         ));
-        assert!(matches!(parse_model("mass = nan\nstiffness = 1.0\ndamping = 0.0", p), Err(IoError::Invalid { .. })));
+        assert!(matches!(
+            parse_model("mass = nan\nstiffness = 1.0\ndamping = 0.0", p),
+            Err(IoError::Invalid { .. })
+        ));
     }
 }

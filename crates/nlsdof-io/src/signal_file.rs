@@ -35,23 +35,47 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum SignalFileError {
     #[error("cannot read {path}: {source}")]
-    Read { path: PathBuf, source: std::io::Error },
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: no samples (empty file)")]
     Empty { path: PathBuf },
     #[error("{path}: line {line}: expected {expected}, found {found} column(s)")]
-    WrongColumns { path: PathBuf, line: u64, expected: String, found: usize },
+    WrongColumns {
+        path: PathBuf,
+        line: u64,
+        expected: String,
+        found: usize,
+    },
     #[error("{path}: line {line}: column {column}: {field:?} is not a number")]
-    NotANumber { path: PathBuf, line: u64, column: usize, field: String },
+    NotANumber {
+        path: PathBuf,
+        line: u64,
+        column: usize,
+        field: String,
+    },
     #[error("{path}: line {line}: {source}")]
-    Invalid { path: PathBuf, line: u64, source: SimulationError },
+    Invalid {
+        path: PathBuf,
+        line: u64,
+        source: SimulationError,
+    },
     #[error("{path}: {source}")]
-    Signal { path: PathBuf, source: SimulationError },
+    Signal {
+        path: PathBuf,
+        source: SimulationError,
+    },
     #[error("{path}: a one-column signal needs the sampling frequency (--fs HZ)")]
     MissingFs { path: PathBuf },
     #[error("{path}: the file has a time column; --fs {fs} would contradict it (drop --fs)")]
     FsWithTimeColumn { path: PathBuf, fs: f64 },
     #[error("{path}: header names no {wanted} column (columns: {found})")]
-    MissingColumn { path: PathBuf, wanted: &'static str, found: String },
+    MissingColumn {
+        path: PathBuf,
+        wanted: &'static str,
+        found: String,
+    },
     #[error("{path}: not a readable MAT v5 file: {message}")]
     Mat { path: PathBuf, message: String },
     #[error("{path}: {message}")]
@@ -92,7 +116,12 @@ impl Signal {
 
     /// Bytes held by the sample arrays.
     pub fn bytes(&self) -> usize {
-        8 * (self.values.len() + if let SignalGrid::Times(t) = &self.grid { t.len() } else { 0 })
+        8 * (self.values.len()
+            + if let SignalGrid::Times(t) = &self.grid {
+                t.len()
+            } else {
+                0
+            })
     }
 }
 
@@ -103,7 +132,10 @@ pub const UNIFORM_TOLERANCE: f64 = 1e-3;
 fn check_fs(path: &Path, fs: Option<f64>) -> Result<(), SignalFileError> {
     if let Some(fs) = fs {
         if !(fs.is_finite() && fs > 0.0) {
-            return Err(SignalFileError::Signal { path: path.into(), source: SimulationError::NonPositiveFs { fs } });
+            return Err(SignalFileError::Signal {
+                path: path.into(),
+                source: SimulationError::NonPositiveFs { fs },
+            });
         }
     }
     Ok(())
@@ -112,8 +144,15 @@ fn check_fs(path: &Path, fs: Option<f64>) -> Result<(), SignalFileError> {
 /// Reads a signal, choosing the format by extension (`.mat` → MAT v5,
 /// anything else → CSV). `fs` is the sampling frequency for a one-column
 /// signal; `var` the MAT variable name.
-pub fn read_signal(path: &Path, fs: Option<f64>, var: Option<&str>) -> Result<Signal, SignalFileError> {
-    let is_mat = path.extension().map(|e| e.eq_ignore_ascii_case("mat")).unwrap_or(false);
+pub fn read_signal(
+    path: &Path,
+    fs: Option<f64>,
+    var: Option<&str>,
+) -> Result<Signal, SignalFileError> {
+    let is_mat = path
+        .extension()
+        .map(|e| e.eq_ignore_ascii_case("mat"))
+        .unwrap_or(false);
     if is_mat {
         read_mat(path, fs, var)
     } else {
@@ -121,12 +160,22 @@ pub fn read_signal(path: &Path, fs: Option<f64>, var: Option<&str>) -> Result<Si
     }
 }
 
-fn finish(path: &Path, values: Vec<f64>, times: Option<Vec<f64>>, fs: Option<f64>) -> Result<Signal, SignalFileError> {
+fn finish(
+    path: &Path,
+    values: Vec<f64>,
+    times: Option<Vec<f64>>,
+    fs: Option<f64>,
+) -> Result<Signal, SignalFileError> {
     if values.is_empty() {
         return Err(SignalFileError::Empty { path: path.into() });
     }
     let grid = match (times, fs) {
-        (Some(_), Some(fs)) => return Err(SignalFileError::FsWithTimeColumn { path: path.into(), fs }),
+        (Some(_), Some(fs)) => {
+            return Err(SignalFileError::FsWithTimeColumn {
+                path: path.into(),
+                fs,
+            })
+        }
         (Some(t), None) => match SampledInput::detect_uniform(&t, UNIFORM_TOLERANCE) {
             Some((t0, fs)) => SignalGrid::Uniform { t0, fs },
             None => SignalGrid::Times(t),
@@ -135,7 +184,10 @@ fn finish(path: &Path, values: Vec<f64>, times: Option<Vec<f64>>, fs: Option<f64
         (None, None) => return Err(SignalFileError::MissingFs { path: path.into() }),
     };
     let s = Signal { values, grid };
-    s.as_input().map_err(|source| SignalFileError::Signal { path: path.into(), source })?;
+    s.as_input().map_err(|source| SignalFileError::Signal {
+        path: path.into(),
+        source,
+    })?;
     Ok(s)
 }
 
@@ -155,7 +207,10 @@ fn parse_field(path: &Path, line: u64, column: usize, raw: &[u8]) -> Result<f64,
 /// Reads a CSV signal (see the module docs).
 pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError> {
     check_fs(path, fs)?;
-    let file = std::fs::File::open(path).map_err(|source| SignalFileError::Read { path: path.into(), source })?;
+    let file = std::fs::File::open(path).map_err(|source| SignalFileError::Read {
+        path: path.into(),
+        source,
+    })?;
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
@@ -165,7 +220,10 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
         .from_reader(std::io::BufReader::with_capacity(1 << 20, file));
     let mut rec = csv::ByteRecord::new();
     let csv_err = |e: csv::Error| match e.into_kind() {
-        csv::ErrorKind::Io(source) => SignalFileError::Read { path: path.into(), source },
+        csv::ErrorKind::Io(source) => SignalFileError::Read {
+            path: path.into(),
+            source,
+        },
         other => SignalFileError::Read {
             path: path.into(),
             source: std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{other:?}")),
@@ -182,7 +240,12 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
             break;
         }
     }
-    let numeric = rec.iter().all(|f| std::str::from_utf8(f).ok().and_then(|s| s.trim().parse::<f64>().ok()).is_some());
+    let numeric = rec.iter().all(|f| {
+        std::str::from_utf8(f)
+            .ok()
+            .and_then(|s| s.trim().parse::<f64>().ok())
+            .is_some()
+    });
     let ncols = rec.len();
     // (time column, accel column) indices
     let (tcol, acol): (Option<usize>, usize) = if numeric {
@@ -199,28 +262,40 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
             }
         }
     } else {
-        let names: Vec<String> = rec.iter().map(|f| String::from_utf8_lossy(f).trim().to_ascii_lowercase()).collect();
+        let names: Vec<String> = rec
+            .iter()
+            .map(|f| String::from_utf8_lossy(f).trim().to_ascii_lowercase())
+            .collect();
         match ncols {
             1 => (None, 0),
             2 => (Some(0), 1),
             _ => {
                 let find = |cands: &[&str]| names.iter().position(|n| cands.contains(&n.as_str()));
                 let t = find(&["t", "time", "t_s"]);
-                let a = find(&["accel", "acceleration", "gamma", "u", "accel_m_s2"]).ok_or_else(|| SignalFileError::MissingColumn {
-                    path: path.into(),
-                    wanted: "accel",
-                    found: names.join(","),
-                })?;
+                let a = find(&["accel", "acceleration", "gamma", "u", "accel_m_s2"]).ok_or_else(
+                    || SignalFileError::MissingColumn {
+                        path: path.into(),
+                        wanted: "accel",
+                        found: names.join(","),
+                    },
+                )?;
                 (t, a)
             }
         }
     };
     if tcol.is_some() && fs.is_some() {
-        return Err(SignalFileError::FsWithTimeColumn { path: path.into(), fs: fs.unwrap_or(0.0) });
+        return Err(SignalFileError::FsWithTimeColumn {
+            path: path.into(),
+            fs: fs.unwrap_or(0.0),
+        });
     }
     let mut values = Vec::new();
     let mut times = tcol.map(|_| Vec::new());
-    let push = |rec: &csv::ByteRecord, line: u64, values: &mut Vec<f64>, times: &mut Option<Vec<f64>>| -> Result<(), SignalFileError> {
+    let push = |rec: &csv::ByteRecord,
+                line: u64,
+                values: &mut Vec<f64>,
+                times: &mut Option<Vec<f64>>|
+     -> Result<(), SignalFileError> {
         if rec.len() != ncols {
             return Err(SignalFileError::WrongColumns {
                 path: path.into(),
@@ -232,12 +307,20 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
         let index = values.len();
         let a = parse_field(path, line, acol, &rec[acol])?;
         if !a.is_finite() {
-            return Err(SignalFileError::Invalid { path: path.into(), line, source: SimulationError::NonFiniteSample { index, value: a } });
+            return Err(SignalFileError::Invalid {
+                path: path.into(),
+                line,
+                source: SimulationError::NonFiniteSample { index, value: a },
+            });
         }
         if let (Some(tc), Some(ts)) = (tcol, times.as_mut()) {
             let t = parse_field(path, line, tc, &rec[tc])?;
             if !t.is_finite() {
-                return Err(SignalFileError::Invalid { path: path.into(), line, source: SimulationError::NonFiniteTime { index, value: t } });
+                return Err(SignalFileError::Invalid {
+                    path: path.into(),
+                    line,
+                    source: SimulationError::NonFiniteTime { index, value: t },
+                });
             }
             if let Some(&previous) = ts.last() {
                 if t <= previous {
@@ -296,51 +379,98 @@ fn to_f64(data: &matfile::NumericData) -> Option<Vec<f64>> {
 }
 
 /// Reads a MAT v5 signal (see the module docs).
-pub fn read_mat(path: &Path, fs: Option<f64>, var: Option<&str>) -> Result<Signal, SignalFileError> {
+pub fn read_mat(
+    path: &Path,
+    fs: Option<f64>,
+    var: Option<&str>,
+) -> Result<Signal, SignalFileError> {
     check_fs(path, fs)?;
-    let file = std::fs::File::open(path).map_err(|source| SignalFileError::Read { path: path.into(), source })?;
-    let mat = matfile::MatFile::parse(std::io::BufReader::new(file))
-        .map_err(|e| SignalFileError::Mat { path: path.into(), message: e.to_string() })?;
-    let content = |message: String| SignalFileError::MatContent { path: path.into(), message };
-    let names: Vec<String> = mat.arrays().iter().map(|a| format!("{}{:?}", a.name(), a.size())).collect();
+    let file = std::fs::File::open(path).map_err(|source| SignalFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    let mat = matfile::MatFile::parse(std::io::BufReader::new(file)).map_err(|e| {
+        SignalFileError::Mat {
+            path: path.into(),
+            message: e.to_string(),
+        }
+    })?;
+    let content = |message: String| SignalFileError::MatContent {
+        path: path.into(),
+        message,
+    };
+    let names: Vec<String> = mat
+        .arrays()
+        .iter()
+        .map(|a| format!("{}{:?}", a.name(), a.size()))
+        .collect();
     let numel = |a: &matfile::Array| a.size().iter().product::<usize>();
     let array = match var {
-        Some(v) => mat
-            .find_by_name(v)
-            .ok_or_else(|| content(format!("no numeric variable {v:?} (variables: {})", names.join(", "))))?,
+        Some(v) => mat.find_by_name(v).ok_or_else(|| {
+            content(format!(
+                "no numeric variable {v:?} (variables: {})",
+                names.join(", ")
+            ))
+        })?,
         None => {
             let big: Vec<&matfile::Array> = mat.arrays().iter().filter(|a| numel(a) > 1).collect();
-            let named = big.iter().find(|a| ["accel", "acceleration", "gamma", "u"].contains(&a.name()));
+            let named = big
+                .iter()
+                .find(|a| ["accel", "acceleration", "gamma", "u"].contains(&a.name()));
             match (big.len(), named) {
                 (0, _) => return Err(SignalFileError::Empty { path: path.into() }),
                 (1, _) => big[0],
                 (_, Some(a)) => a,
-                _ => return Err(content(format!("several arrays ({}); choose one with --var", names.join(", ")))),
+                _ => {
+                    return Err(content(format!(
+                        "several arrays ({}); choose one with --var",
+                        names.join(", ")
+                    )))
+                }
             }
         }
     };
     let size = array.size().clone();
-    let data = to_f64(array.data()).ok_or_else(|| content(format!("variable {:?} is complex; a real signal is needed", array.name())))?;
+    let data = to_f64(array.data()).ok_or_else(|| {
+        content(format!(
+            "variable {:?} is complex; a real signal is needed",
+            array.name()
+        ))
+    })?;
     if data.is_empty() {
         return Err(SignalFileError::Empty { path: path.into() });
     }
     let dims: Vec<usize> = size.iter().copied().filter(|&d| d != 1).collect();
     let check_values = |values: &[f64]| -> Result<(), SignalFileError> {
         if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(SignalFileError::Signal { path: path.into(), source: SimulationError::NonFiniteSample { index, value } });
+            return Err(SignalFileError::Signal {
+                path: path.into(),
+                source: SimulationError::NonFiniteSample { index, value },
+            });
         }
         Ok(())
     };
     let check_times = |t: &[f64]| -> Result<(), SignalFileError> {
         for (index, w) in t.windows(2).enumerate() {
             if !w[1].is_finite() || !w[0].is_finite() {
-                let (index, value) = if w[0].is_finite() { (index + 1, w[1]) } else { (index, w[0]) };
-                return Err(SignalFileError::Signal { path: path.into(), source: SimulationError::NonFiniteTime { index, value } });
+                let (index, value) = if w[0].is_finite() {
+                    (index + 1, w[1])
+                } else {
+                    (index, w[0])
+                };
+                return Err(SignalFileError::Signal {
+                    path: path.into(),
+                    source: SimulationError::NonFiniteTime { index, value },
+                });
             }
             if w[1] <= w[0] {
                 return Err(SignalFileError::Signal {
                     path: path.into(),
-                    source: SimulationError::NonMonotonicTime { index: index + 1, t: w[1], previous: w[0] },
+                    source: SimulationError::NonMonotonicTime {
+                        index: index + 1,
+                        t: w[1],
+                        previous: w[0],
+                    },
                 });
             }
         }
@@ -354,11 +484,17 @@ pub fn read_mat(path: &Path, fs: Option<f64>, var: Option<&str>) -> Result<Signa
             return finish(path, values, None, Some(fs));
         }
         if let Some(a) = mat.find_by_name("fs").filter(|a| numel(a) == 1) {
-            let f = to_f64(a.data()).and_then(|v| v.first().copied()).unwrap_or(f64::NAN);
+            let f = to_f64(a.data())
+                .and_then(|v| v.first().copied())
+                .unwrap_or(f64::NAN);
             check_fs(path, Some(f))?;
             return finish(path, values, None, Some(f));
         }
-        if let Some(t) = ["t", "time"].iter().filter_map(|n| mat.find_by_name(n)).find(|a| numel(a) == values.len() && a.name() != array.name()) {
+        if let Some(t) = ["t", "time"]
+            .iter()
+            .filter_map(|n| mat.find_by_name(n))
+            .find(|a| numel(a) == values.len() && a.name() != array.name())
+        {
             let t = to_f64(t.data()).ok_or_else(|| content("time vector is complex".into()))?;
             check_times(&t)?;
             return finish(path, values, Some(t), None);
@@ -376,7 +512,10 @@ pub fn read_mat(path: &Path, fs: Option<f64>, var: Option<&str>) -> Result<Signa
         check_times(&t)?;
         check_values(&a)?;
         if let Some(fs) = fs {
-            return Err(SignalFileError::FsWithTimeColumn { path: path.into(), fs });
+            return Err(SignalFileError::FsWithTimeColumn {
+                path: path.into(),
+                fs,
+            });
         }
         return finish(path, a, Some(t), None);
     }
@@ -400,7 +539,12 @@ pub struct CsvWriter {
 impl CsvWriter {
     /// Creates the (hidden) file and writes the header.
     pub fn create(path: &Path, header: &[&str]) -> Result<Self, IoError> {
-        let mut w = Self { file: AtomicFile::create(path)?, path: path.into(), num: ryu::Buffer::new(), first: true };
+        let mut w = Self {
+            file: AtomicFile::create(path)?,
+            path: path.into(),
+            num: ryu::Buffer::new(),
+            first: true,
+        };
         for h in header {
             w.text(h)?;
         }
@@ -409,7 +553,10 @@ impl CsvWriter {
     }
 
     fn err(&self, source: std::io::Error) -> IoError {
-        IoError::Write { path: self.path.clone(), source }
+        IoError::Write {
+            path: self.path.clone(),
+            source,
+        }
     }
 
     fn sep(&mut self) -> Result<(), IoError> {
@@ -435,7 +582,13 @@ impl CsvWriter {
         };
         let bytes = s.as_bytes();
         // ryu writes integers as "1.0": keep it (reads back as a float)
-        self.file.writer().write_all(bytes).map_err(|e| IoError::Write { path: self.path.clone(), source: e })
+        self.file
+            .writer()
+            .write_all(bytes)
+            .map_err(|e| IoError::Write {
+                path: self.path.clone(),
+                source: e,
+            })
     }
 
     /// One text field (must not contain commas, quotes or newlines).
@@ -493,8 +646,15 @@ mod tests {
         let p = write(d.path(), "b.csv", "# comment\n1\n2\n\n3\n");
         let s = read_csv(&p, Some(100.0)).unwrap();
         assert_eq!(s.values.len(), 3);
-        assert!(matches!(read_csv(&p, None), Err(SignalFileError::MissingFs { .. })));
-        let p = write(d.path(), "c.csv", "t,accel,x,v\n0,1,0,0\n0.1,2,0,0\n0.3,3,0,0\n");
+        assert!(matches!(
+            read_csv(&p, None),
+            Err(SignalFileError::MissingFs { .. })
+        ));
+        let p = write(
+            d.path(),
+            "c.csv",
+            "t,accel,x,v\n0,1,0,0\n0.1,2,0,0\n0.3,3,0,0\n",
+        );
         let s = read_csv(&p, None).unwrap();
         assert_eq!(s.grid, SignalGrid::Times(vec![0.0, 0.1, 0.3]));
         let p = write(d.path(), "d.csv", "0 , 1\n1e-3, 2\n2e-3,-3.5\n");
@@ -509,26 +669,65 @@ mod tests {
         let e = read_csv(&write(d.path(), "h.csv", "t,accel\n"), None).unwrap_err();
         assert!(matches!(e, SignalFileError::Empty { .. }), "{e}");
         let e = read_csv(&write(d.path(), "n.csv", "t,accel\n0,1\n1,nan\n"), None).unwrap_err();
-        assert!(matches!(e, SignalFileError::Invalid { line: 3, source: SimulationError::NonFiniteSample { index: 1, .. }, .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                SignalFileError::Invalid {
+                    line: 3,
+                    source: SimulationError::NonFiniteSample { index: 1, .. },
+                    ..
+                }
+            ),
+            "{e}"
+        );
         let e = read_csv(&write(d.path(), "m.csv", "0,1\n1,2\n0.5,3\n"), None).unwrap_err();
         assert!(
             matches!(e, SignalFileError::Invalid { line: 3, source: SimulationError::NonMonotonicTime { index: 2, t, previous }, .. } if t == 0.5 && previous == 1.0),
             "{e}"
         );
         let e = read_csv(&write(d.path(), "w.csv", "0,1,2\n"), None).unwrap_err();
-        assert!(matches!(e, SignalFileError::WrongColumns { found: 3, .. }), "{e}");
+        assert!(
+            matches!(e, SignalFileError::WrongColumns { found: 3, .. }),
+            "{e}"
+        );
         let e = read_csv(&write(d.path(), "r.csv", "0,1\n1\n"), None).unwrap_err();
-        assert!(matches!(e, SignalFileError::WrongColumns { line: 2, found: 1, .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                SignalFileError::WrongColumns {
+                    line: 2,
+                    found: 1,
+                    ..
+                }
+            ),
+            "{e}"
+        );
         let e = read_csv(&write(d.path(), "x.csv", "0,1\n1,abc\n"), None).unwrap_err();
-        assert!(matches!(e, SignalFileError::NotANumber { line: 2, column: 2, .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                SignalFileError::NotANumber {
+                    line: 2,
+                    column: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
         let p = write(d.path(), "f.csv", "1\n2\n");
         let e = read_csv(&p, Some(0.0)).unwrap_err();
-        assert!(matches!(e, SignalFileError::Signal { source: SimulationError::NonPositiveFs { fs }, .. } if fs == 0.0), "{e}");
+        assert!(
+            matches!(e, SignalFileError::Signal { source: SimulationError::NonPositiveFs { fs }, .. } if fs == 0.0),
+            "{e}"
+        );
         let e = read_csv(&write(d.path(), "g.csv", "0,1\n1,2\n"), Some(5.0)).unwrap_err();
         assert!(matches!(e, SignalFileError::FsWithTimeColumn { .. }), "{e}");
         let e = read_csv(&write(d.path(), "k.csv", "a,b,c\n1,2,3\n"), None).unwrap_err();
         assert!(matches!(e, SignalFileError::MissingColumn { .. }), "{e}");
-        assert!(matches!(read_csv(&d.path().join("missing.csv"), None), Err(SignalFileError::Read { .. })));
+        assert!(matches!(
+            read_csv(&d.path().join("missing.csv"), None),
+            Err(SignalFileError::Read { .. })
+        ));
     }
 
     /// Minimal MAT v5 writer for tests: one uncompressed double matrix per
@@ -574,33 +773,69 @@ mod tests {
     fn reads_mat_v5_vectors_and_matrices() {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("v.mat");
-        std::fs::write(&p, mat_bytes(&[("accel", 4, 1, &[1.0, 2.0, 3.0, 4.0]), ("fs", 1, 1, &[2048.0])])).unwrap();
+        std::fs::write(
+            &p,
+            mat_bytes(&[
+                ("accel", 4, 1, &[1.0, 2.0, 3.0, 4.0]),
+                ("fs", 1, 1, &[2048.0]),
+            ]),
+        )
+        .unwrap();
         let s = read_signal(&p, None, None).unwrap();
         assert_eq!(s.values, vec![1.0, 2.0, 3.0, 4.0]);
-        assert_eq!(s.grid, SignalGrid::Uniform { t0: 0.0, fs: 2048.0 });
+        assert_eq!(
+            s.grid,
+            SignalGrid::Uniform {
+                t0: 0.0,
+                fs: 2048.0
+            }
+        );
         // n×2 [t accel], column-major
         let p = d.path().join("m.mat");
-        std::fs::write(&p, mat_bytes(&[("rec", 3, 2, &[0.0, 0.1, 0.3, 5.0, 6.0, 7.0])])).unwrap();
+        std::fs::write(
+            &p,
+            mat_bytes(&[("rec", 3, 2, &[0.0, 0.1, 0.3, 5.0, 6.0, 7.0])]),
+        )
+        .unwrap();
         let s = read_signal(&p, None, None).unwrap();
         assert_eq!(s.values, vec![5.0, 6.0, 7.0]);
         assert_eq!(s.grid, SignalGrid::Times(vec![0.0, 0.1, 0.3]));
         // several arrays: choose by name
         let p = d.path().join("s.mat");
-        std::fs::write(&p, mat_bytes(&[("a", 1, 3, &[1.0, 2.0, 3.0]), ("b", 1, 3, &[4.0, 5.0, 6.0])])).unwrap();
-        assert!(matches!(read_signal(&p, Some(10.0), None), Err(SignalFileError::MatContent { .. })));
-        assert_eq!(read_signal(&p, Some(10.0), Some("b")).unwrap().values, vec![4.0, 5.0, 6.0]);
-        assert!(matches!(read_signal(&p, Some(10.0), Some("zz")), Err(SignalFileError::MatContent { .. })));
+        std::fs::write(
+            &p,
+            mat_bytes(&[("a", 1, 3, &[1.0, 2.0, 3.0]), ("b", 1, 3, &[4.0, 5.0, 6.0])]),
+        )
+        .unwrap();
+        assert!(matches!(
+            read_signal(&p, Some(10.0), None),
+            Err(SignalFileError::MatContent { .. })
+        ));
+        assert_eq!(
+            read_signal(&p, Some(10.0), Some("b")).unwrap().values,
+            vec![4.0, 5.0, 6.0]
+        );
+        assert!(matches!(
+            read_signal(&p, Some(10.0), Some("zz")),
+            Err(SignalFileError::MatContent { .. })
+        ));
         // NaN in a MAT vector
         let p = d.path().join("nan.mat");
         std::fs::write(&p, mat_bytes(&[("accel", 3, 1, &[1.0, f64::NAN, 3.0])])).unwrap();
         assert!(matches!(
             read_signal(&p, Some(10.0), None),
-            Err(SignalFileError::Signal { source: SimulationError::NonFiniteSample { index: 1, .. }, .. })
+            Err(SignalFileError::Signal {
+                source: SimulationError::NonFiniteSample { index: 1, .. },
+                ..
+            })
         ));
         // not a MAT file
         let p = d.path().join("bad.mat");
         std::fs::write(&p, b"hello").unwrap();
-        assert!(matches!(read_signal(&p, Some(10.0), None), Err(SignalFileError::Mat { .. })));
+        assert!(matches!(
+            read_signal(&p, Some(10.0), None),
+            Err(SignalFileError::Mat { .. })
+        ));
     }
 
     #[test]

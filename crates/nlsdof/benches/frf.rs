@@ -17,11 +17,16 @@ fn wing() -> Model {
 
 fn duffing() -> Model {
     let wn = 2.0 * PI * 10.0;
-    Model::linear(1.0, wn * wn, 2.0 * 0.01 * wn).unwrap().with_stiffness(4.0e7, 2.0).unwrap()
+    Model::linear(1.0, wn * wn, 2.0 * 0.01 * wn)
+        .unwrap()
+        .with_stiffness(4.0e7, 2.0)
+        .unwrap()
 }
 
 fn frf(model: &Model, gammas: &[f64], f0: f64, f1: f64, dir: SweepDirection) -> usize {
-    let omegas: Vec<f64> = (0..200).map(|i| 2.0 * PI * (f0 + (f1 - f0) * i as f64 / 199.0)).collect();
+    let omegas: Vec<f64> = (0..200)
+        .map(|i| 2.0 * PI * (f0 + (f1 - f0) * i as f64 / 199.0))
+        .collect();
     let mut n = 0;
     for &g in gammas {
         let r = ForcedResponse::new(model, g, Formulation::HarmonicBalance).unwrap();
@@ -37,23 +42,52 @@ fn bench(c: &mut Criterion) {
     c.bench_function("frf wing 5x200 sweep up (real exponents)", |b| {
         b.iter(|| frf(black_box(&wing), &wing_levels, 5.2, 5.6, SweepDirection::Up))
     });
-    let omegas: Vec<f64> = (0..200).map(|i| 2.0 * PI * (5.2 + 0.4 * i as f64 / 199.0)).collect();
-    c.bench_function("frf wing 5x200 sweep up, levels in parallel (sweep_levels)", |b| {
-        b.iter(|| {
-            sweep_levels(black_box(&wing), &wing_levels, &omegas, SweepDirection::Up, Formulation::HarmonicBalance)
+    let omegas: Vec<f64> = (0..200)
+        .map(|i| 2.0 * PI * (5.2 + 0.4 * i as f64 / 199.0))
+        .collect();
+    c.bench_function(
+        "frf wing 5x200 sweep up, levels in parallel (sweep_levels)",
+        |b| {
+            b.iter(|| {
+                sweep_levels(
+                    black_box(&wing),
+                    &wing_levels,
+                    &omegas,
+                    SweepDirection::Up,
+                    Formulation::HarmonicBalance,
+                )
                 .unwrap()
-        })
-    });
+            })
+        },
+    );
     let duff = duffing();
     let duff_levels = [0.25, 0.5, 1.0, 1.5, 2.0];
     c.bench_function("frf strong duffing 5x200 sweep up (jumps)", |b| {
-        b.iter(|| frf(black_box(&duff), &duff_levels, 8.0, 22.0, SweepDirection::Up))
+        b.iter(|| {
+            frf(
+                black_box(&duff),
+                &duff_levels,
+                8.0,
+                22.0,
+                SweepDirection::Up,
+            )
+        })
     });
     c.bench_function("frf strong duffing 5x200 sweep down (jumps)", |b| {
-        b.iter(|| frf(black_box(&duff), &duff_levels, 8.0, 22.0, SweepDirection::Down))
+        b.iter(|| {
+            frf(
+                black_box(&duff),
+                &duff_levels,
+                8.0,
+                22.0,
+                SweepDirection::Down,
+            )
+        })
     });
     let r = ForcedResponse::new(&duff, 1.0, Formulation::HarmonicBalance).unwrap();
-    c.bench_function("steady_states duffing, 3 roots", |b| b.iter(|| r.steady_states(black_box(2.0 * PI * 14.0))));
+    c.bench_function("steady_states duffing, 3 roots", |b| {
+        b.iter(|| r.steady_states(black_box(2.0 * PI * 14.0)))
+    });
 }
 
 criterion_group! {

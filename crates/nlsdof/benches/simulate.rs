@@ -33,7 +33,11 @@ const N: usize = 8_752_000;
 const FS: f64 = 2048.0;
 
 fn wing(integer: bool) -> NormalisedModel {
-    let (rho, eta) = if integer { (4.0, 3.0) } else { (4.00220, 3.03099) };
+    let (rho, eta) = if integer {
+        (4.0, 3.0)
+    } else {
+        (4.00220, 3.03099)
+    };
     Model::linear(0.26699, 306.7878, 0.1164)
         .unwrap()
         .with_stiffness(85000.0, rho)
@@ -51,7 +55,9 @@ fn input() -> Vec<f64> {
     let mut state: u64 = 0x2545F4914F6CDD1D;
     (0..N)
         .map(|k| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let noise = ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0;
             s.accel(k as f64 / FS) + 0.02 * 0.62 * noise
         })
@@ -88,7 +94,10 @@ fn main() {
         return;
     }
 
-    println!("input: {N} samples at {FS} Hz ({:.1} min), generated in {gen_s:.2} s", N as f64 / FS / 60.0);
+    println!(
+        "input: {N} samples at {FS} Hz ({:.1} min), generated in {gen_s:.2} s",
+        N as f64 / FS / 60.0
+    );
     let (mut x, mut v) = (Vec::with_capacity(N), Vec::with_capacity(N));
     // touch the output pages once
     simulate_into(&int, &inp, &Options::default(), &mut x, &mut v).unwrap();
@@ -99,13 +108,21 @@ fn main() {
         ("wing real exponents, RK4 1 sample/step", &real, 1),
         ("wing integer exponents, RK4 1 sample/step", &int, 1),
     ] {
-        let opts = Options { method: Method::Rk4 { samples_per_step: sps }, ..Default::default() };
+        let opts = Options {
+            method: Method::Rk4 {
+                samples_per_step: sps,
+            },
+            ..Default::default()
+        };
         let secs = best_of(3, || {
             let t = Instant::now();
             simulate_into(model, &inp, &opts, &mut x, &mut v).unwrap();
             t.elapsed().as_secs_f64()
         });
-        println!("{name:48} {secs:.3} s  ({:.1} ns/sample)", secs / N as f64 * 1e9);
+        println!(
+            "{name:48} {secs:.3} s  ({:.1} ns/sample)",
+            secs / N as f64 * 1e9
+        );
         results.push((name, secs));
     }
     // streaming without storing anything
@@ -116,11 +133,24 @@ fn main() {
         std::hint::black_box(acc);
         t.elapsed().as_secs_f64()
     });
-    println!("{:48} {secs:.3} s", "wing real, RK4 x2, streaming (no arrays)");
+    println!(
+        "{:48} {secs:.3} s",
+        "wing real, RK4 x2, streaming (no arrays)"
+    );
     let slice = 1 << 20;
     let part = SampledInput::uniform(&u[..slice], FS, 0.0).unwrap();
     let t = Instant::now();
-    let s = simulate_into(&real, &part, &Options { method: Method::reference(), ..Default::default() }, &mut x, &mut v).unwrap();
+    let s = simulate_into(
+        &real,
+        &part,
+        &Options {
+            method: Method::reference(),
+            ..Default::default()
+        },
+        &mut x,
+        &mut v,
+    )
+    .unwrap();
     let dp = t.elapsed().as_secs_f64();
     println!(
         "{:48} {dp:.3} s for 2^20 samples ({:.1} ns/sample, {} RHS, {} rejected)",
@@ -137,22 +167,97 @@ fn main() {
     std::fs::create_dir_all(&dir).unwrap();
     let uin = dir.join("u.f64");
     let xref = dir.join("x.f64");
-    std::fs::write(&uin, u[..n16].iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+    std::fs::write(
+        &uin,
+        u[..n16]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect::<Vec<u8>>(),
+    )
+    .unwrap();
     let p16 = SampledInput::uniform(&u[..n16], FS, 0.0).unwrap();
-    simulate_into(&real, &p16, &Options { method: Method::reference(), ..Default::default() }, &mut x, &mut v).unwrap();
-    std::fs::write(&xref, x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+    simulate_into(
+        &real,
+        &p16,
+        &Options {
+            method: Method::reference(),
+            ..Default::default()
+        },
+        &mut x,
+        &mut v,
+    )
+    .unwrap();
+    std::fs::write(
+        &xref,
+        x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>(),
+    )
+    .unwrap();
     simulate_into(&real, &p16, &Options::default(), &mut x, &mut v).unwrap();
     let mut xr = vec![];
-    simulate(&real, &p16, &Options { method: Method::reference(), ..Default::default() }, |s| xr.push(s.x)).unwrap();
+    simulate(
+        &real,
+        &p16,
+        &Options {
+            method: Method::reference(),
+            ..Default::default()
+        },
+        |s| xr.push(s.x),
+    )
+    .unwrap();
     let scale = xr.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let rk4_err = x.iter().zip(&xr).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale;
-    println!("RK4 x2 vs Dormand-Prince on the 2^16 slice: relative max error {rk4_err:.2e}");
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scripts/bench_scipy_simulate.py");
+    let rk4_err = x
+        .iter()
+        .zip(&xr)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / scale;
+    println!(
+        "RK4 x2 vs Dormand-Prince on the 2^16 slice: relative max error {rk4_err:.2e} (input read as smooth vs piecewise linear between samples)"
+    );
+    simulate_into(
+        &real,
+        &p16,
+        &Options {
+            method: Method::Rk4 {
+                samples_per_step: 1,
+            },
+            ..Default::default()
+        },
+        &mut x,
+        &mut v,
+    )
+    .unwrap();
+    let rk4_1_err = x
+        .iter()
+        .zip(&xr)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / scale;
+    println!("RK4 x1 vs Dormand-Prince on the 2^16 slice: relative max error {rk4_1_err:.2e} (same piecewise-linear input)");
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scripts/bench_scipy_simulate.py"
+    );
     let model_arg = "0.26699,306.7878,0.1164,85000,4.0022,0.01591,3.03099";
     for (rtol, atol) in [("1e-3", "1e-6"), ("1e-8", "1e-11")] {
         let out = std::process::Command::new("python3")
-            .args([script, "--input", uin.to_str().unwrap(), "--fs", "2048", "--model", model_arg])
-            .args(["--rtol", rtol, "--atol", atol, "--reference", xref.to_str().unwrap()])
+            .args([
+                script,
+                "--input",
+                uin.to_str().unwrap(),
+                "--fs",
+                "2048",
+                "--model",
+                model_arg,
+            ])
+            .args([
+                "--rtol",
+                rtol,
+                "--atol",
+                atol,
+                "--reference",
+                xref.to_str().unwrap(),
+            ])
             .output();
         match out {
             Ok(o) if o.status.success() => {
@@ -173,7 +278,13 @@ fn main() {
                     None => println!("scipy: unexpected output {text}"),
                 }
             }
-            Ok(o) => println!("scipy comparison skipped: {}", String::from_utf8_lossy(&o.stderr).lines().last().unwrap_or("")),
+            Ok(o) => println!(
+                "scipy comparison skipped: {}",
+                String::from_utf8_lossy(&o.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
+            ),
             Err(e) => println!("scipy comparison skipped: python3 not runnable ({e})"),
         }
     }
@@ -185,8 +296,19 @@ fn main() {
     let mut cycles = 0;
     let rig = best_of(2, || {
         let t = Instant::now();
-        let r = run_levels(&real, &gammas, &omegas, SweepDirection::Up, &RigOptions::default(), &|| {}).unwrap();
-        cycles = r.iter().flat_map(|s| s.points.iter().map(|p| p.cycles)).sum::<usize>();
+        let r = run_levels(
+            &real,
+            &gammas,
+            &omegas,
+            SweepDirection::Up,
+            &RigOptions::default(),
+            &|| {},
+        )
+        .unwrap();
+        cycles = r
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.cycles))
+            .sum::<usize>();
         t.elapsed().as_secs_f64()
     });
     println!(

@@ -12,7 +12,9 @@ pub enum ParameterError {
     NotPositive { name: &'static str, value: f64 },
     #[error("{name} = {value} must be >= 0")]
     Negative { name: &'static str, value: f64 },
-    #[error("exponent {name} = {value} must be > -3 (the equivalent coefficient, Eq 8, diverges at -3)")]
+    #[error(
+        "exponent {name} = {value} must be > -3 (the equivalent coefficient, Eq 8, diverges at -3)"
+    )]
     ExponentTooSmall { name: &'static str, value: f64 },
     #[error("exponent {value} is not an even integer > -3 (Eq 17)")]
     NotEvenExponent { value: i64 },
@@ -21,7 +23,11 @@ pub enum ParameterError {
     #[error("frequency range [{min}, {max}] is invalid: need 0 < min < max, both finite")]
     InvalidRange { min: f64, max: f64 },
     #[error("frequencies must be strictly increasing: element {index} ({value} rad/s) does not exceed the previous one ({previous} rad/s)")]
-    NotIncreasing { index: usize, value: f64, previous: f64 },
+    NotIncreasing {
+        index: usize,
+        value: f64,
+        previous: f64,
+    },
     #[error("{name} is empty")]
     Empty { name: &'static str },
 }
@@ -34,5 +40,9 @@ pub enum SolveError {
     #[error("harmonic-balance equation could not be evaluated (overflow) at amplitude {amplitude} m, frequency {omega} rad/s: parameters out of representable range")]
     Overflow { amplitude: f64, omega: f64 },
     #[error("{what} did not converge after {iterations} iterations (last residual {residual:e})")]
-    NoConvergence { what: &'static str, iterations: usize, residual: f64 },
+    NoConvergence {
+        what: &'static str,
+        iterations: usize,
+        residual: f64,
+    },
 }

@@ -39,7 +39,11 @@ fn check_finite(name: &'static str, v: f64) -> Result<(), SimulationError> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(SimulationError::InvalidOption { name, value: v, reason: "not a finite number" })
+        Err(SimulationError::InvalidOption {
+            name,
+            value: v,
+            reason: "not a finite number",
+        })
     }
 }
 
@@ -48,7 +52,11 @@ fn check_positive(name: &'static str, v: f64) -> Result<(), SimulationError> {
     if v > 0.0 {
         Ok(())
     } else {
-        Err(SimulationError::InvalidOption { name, value: v, reason: "must be > 0" })
+        Err(SimulationError::InvalidOption {
+            name,
+            value: v,
+            reason: "must be > 0",
+        })
     }
 }
 
@@ -68,7 +76,11 @@ impl Sine {
         check_finite("amplitude", amplitude)?;
         check_positive("omega", omega)?;
         check_finite("phase", phase)?;
-        Ok(Self { amplitude, omega, phase })
+        Ok(Self {
+            amplitude,
+            omega,
+            phase,
+        })
     }
 }
 
@@ -95,11 +107,20 @@ impl LinearChirp {
         check_finite("amplitude", amplitude)?;
         check_positive("omega0", omega0)?;
         check_finite("rate", rate)?;
-        Ok(Self { amplitude, omega0, rate })
+        Ok(Self {
+            amplitude,
+            omega0,
+            rate,
+        })
     }
 
     /// From start and end frequency and the duration T (s).
-    pub fn between(amplitude: f64, omega0: f64, omega1: f64, duration: f64) -> Result<Self, SimulationError> {
+    pub fn between(
+        amplitude: f64,
+        omega0: f64,
+        omega1: f64,
+        duration: f64,
+    ) -> Result<Self, SimulationError> {
         check_positive("omega1", omega1)?;
         check_positive("duration", duration)?;
         Self::from_rate(amplitude, omega0, (omega1 - omega0) / duration)
@@ -130,7 +151,12 @@ pub struct LogChirp {
 }
 
 impl LogChirp {
-    pub fn new(amplitude: f64, omega0: f64, omega1: f64, duration: f64) -> Result<Self, SimulationError> {
+    pub fn new(
+        amplitude: f64,
+        omega0: f64,
+        omega1: f64,
+        duration: f64,
+    ) -> Result<Self, SimulationError> {
         check_finite("amplitude", amplitude)?;
         check_positive("omega0", omega0)?;
         check_positive("omega1", omega1)?;
@@ -142,7 +168,13 @@ impl LogChirp {
                 reason: "a logarithmic chirp needs omega1 != omega0 (use a sine)",
             });
         }
-        Ok(Self { amplitude, omega0, omega1, duration, k: (omega1 / omega0).ln() / duration })
+        Ok(Self {
+            amplitude,
+            omega0,
+            omega1,
+            duration,
+            k: (omega1 / omega0).ln() / duration,
+        })
     }
 
     /// Instantaneous frequency ω₀ e^{k t}, rad/s.
@@ -192,7 +224,11 @@ impl SteppedSine {
         }
         match dwell {
             Dwell::Cycles(0) => {
-                return Err(SimulationError::InvalidOption { name: "dwell cycles", value: 0.0, reason: "must be >= 1" })
+                return Err(SimulationError::InvalidOption {
+                    name: "dwell cycles",
+                    value: 0.0,
+                    reason: "must be >= 1",
+                })
             }
             Dwell::Seconds(s) => check_positive("dwell seconds", s)?,
             _ => {}
@@ -214,7 +250,12 @@ impl SteppedSine {
             };
         }
         starts.push(t);
-        Ok(Self { amplitude, omegas, starts, phases })
+        Ok(Self {
+            amplitude,
+            omegas,
+            starts,
+            phases,
+        })
     }
 
     /// Total duration, s.
@@ -247,7 +288,11 @@ impl Excitation for SteppedSine {
 }
 
 /// Samples `e` at `t_k = k / fs`, `k = 0 .. n−1`.
-pub fn sample<E: Excitation + ?Sized>(e: &E, fs: f64, n: usize) -> Result<Vec<f64>, SimulationError> {
+pub fn sample<E: Excitation + ?Sized>(
+    e: &E,
+    fs: f64,
+    n: usize,
+) -> Result<Vec<f64>, SimulationError> {
     if !(fs.is_finite() && fs > 0.0) {
         return Err(SimulationError::NonPositiveFs { fs });
     }
@@ -277,7 +322,10 @@ fn check_samples(values: &[f64]) -> Result<(), SimulationError> {
         return Err(SimulationError::EmptyInput);
     }
     if values.len() < 2 {
-        return Err(SimulationError::TooFewSamples { len: values.len(), min: 2 });
+        return Err(SimulationError::TooFewSamples {
+            len: values.len(),
+            min: 2,
+        });
     }
     if let Some((index, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SimulationError::NonFiniteSample { index, value });
@@ -293,16 +341,26 @@ impl<'a> SampledInput<'a> {
             return Err(SimulationError::NonPositiveFs { fs });
         }
         if !t0.is_finite() {
-            return Err(SimulationError::NonFiniteTime { index: 0, value: t0 });
+            return Err(SimulationError::NonFiniteTime {
+                index: 0,
+                value: t0,
+            });
         }
         check_samples(values)?;
-        Ok(Self { values, grid: Grid::Uniform { t0, fs }, gain: 1.0 })
+        Ok(Self {
+            values,
+            grid: Grid::Uniform { t0, fs },
+            gain: 1.0,
+        })
     }
 
     /// Input with an explicit time column (strictly increasing, finite).
     pub fn with_times(times: &'a [f64], values: &'a [f64]) -> Result<Self, SimulationError> {
         if times.len() != values.len() {
-            return Err(SimulationError::LengthMismatch { times: times.len(), samples: values.len() });
+            return Err(SimulationError::LengthMismatch {
+                times: times.len(),
+                samples: values.len(),
+            });
         }
         check_samples(values)?;
         for (index, &t) in times.iter().enumerate() {
@@ -310,10 +368,18 @@ impl<'a> SampledInput<'a> {
                 return Err(SimulationError::NonFiniteTime { index, value: t });
             }
             if index > 0 && t <= times[index - 1] {
-                return Err(SimulationError::NonMonotonicTime { index, t, previous: times[index - 1] });
+                return Err(SimulationError::NonMonotonicTime {
+                    index,
+                    t,
+                    previous: times[index - 1],
+                });
             }
         }
-        Ok(Self { values, grid: Grid::Times(times), gain: 1.0 })
+        Ok(Self {
+            values,
+            grid: Grid::Times(times),
+            gain: 1.0,
+        })
     }
 
     /// Multiplies every sample by `gain` (e.g. −1: recorded base acceleration
@@ -336,7 +402,10 @@ impl<'a> SampledInput<'a> {
         if !(dt > 0.0 && dt.is_finite()) {
             return None;
         }
-        let ok = times.iter().enumerate().all(|(k, &t)| (t - (t0 + k as f64 * dt)).abs() <= rel_tol * dt);
+        let ok = times
+            .iter()
+            .enumerate()
+            .all(|(k, &t)| (t - (t0 + k as f64 * dt)).abs() <= rel_tol * dt);
         ok.then(|| (t0, 1.0 / dt))
     }
 
@@ -456,10 +525,22 @@ mod tests {
         assert_eq!(s.accel(1.25), 0.5);
         assert_eq!(s.accel(1.75), 2.5);
         assert_eq!(s.accel(9.0), 4.0);
-        assert_eq!(SampledInput::uniform(&v, 0.0, 0.0), Err(SimulationError::NonPositiveFs { fs: 0.0 }));
-        assert_eq!(SampledInput::uniform(&v, -3.0, 0.0), Err(SimulationError::NonPositiveFs { fs: -3.0 }));
-        assert!(matches!(SampledInput::uniform(&v, f64::NAN, 0.0), Err(SimulationError::NonPositiveFs { .. })));
-        assert_eq!(SampledInput::uniform(&[], 1.0, 0.0), Err(SimulationError::EmptyInput));
+        assert_eq!(
+            SampledInput::uniform(&v, 0.0, 0.0),
+            Err(SimulationError::NonPositiveFs { fs: 0.0 })
+        );
+        assert_eq!(
+            SampledInput::uniform(&v, -3.0, 0.0),
+            Err(SimulationError::NonPositiveFs { fs: -3.0 })
+        );
+        assert!(matches!(
+            SampledInput::uniform(&v, f64::NAN, 0.0),
+            Err(SimulationError::NonPositiveFs { .. })
+        ));
+        assert_eq!(
+            SampledInput::uniform(&[], 1.0, 0.0),
+            Err(SimulationError::EmptyInput)
+        );
         let bad = [0.0, f64::NAN];
         assert!(matches!(
             SampledInput::uniform(&bad, 1.0, 0.0),
@@ -468,12 +549,22 @@ mod tests {
         let t = [0.0, 0.5, 0.4];
         assert_eq!(
             SampledInput::with_times(&t, &v),
-            Err(SimulationError::NonMonotonicTime { index: 2, t: 0.4, previous: 0.5 })
+            Err(SimulationError::NonMonotonicTime {
+                index: 2,
+                t: 0.4,
+                previous: 0.5
+            })
         );
         let t = [0.0, 0.5, 2.0];
-        let s = SampledInput::with_times(&t, &v).unwrap().with_gain(-1.0).unwrap();
+        let s = SampledInput::with_times(&t, &v)
+            .unwrap()
+            .with_gain(-1.0)
+            .unwrap();
         assert_eq!(s.accel(1.25), -2.5);
-        assert_eq!(SampledInput::detect_uniform(&[0.0, 0.5, 1.0000001], 1e-3), Some((0.0, 1.0 / 0.50000005)));
+        assert_eq!(
+            SampledInput::detect_uniform(&[0.0, 0.5, 1.0000001], 1e-3),
+            Some((0.0, 1.0 / 0.50000005))
+        );
         assert_eq!(SampledInput::detect_uniform(&[0.0, 0.6, 1.0], 1e-3), None);
     }
 }

@@ -21,6 +21,12 @@
 //!   stability, folds, stepped-sine branch following, backbone, phase
 //!   quadrature.
 //!
+//! * [`vector_fitting`] — linear identification (Section 2.3, Table 3):
+//!   fast relaxed vector fitting of a measured FRF, modal parameters, the
+//!   SDoF linear part; half-power and circle fit for comparison.
+//! * [`signal_processing`] — FRF estimation from time histories (Welch
+//!   H1/H2 and coherence, spectral ratio of a sweep), windows.
+//!
 //! Conventions: SI units; amplitudes and input levels are **zero-to-peak**
 //! (the paper quotes peak-to-peak); frequencies are angular (rad/s) in the
 //! library, Hz only at the CLI.
@@ -28,16 +34,20 @@
 pub mod error;
 pub mod excitation;
 pub mod harmonic_balance;
+pub mod identification;
 pub mod model;
 pub mod power_law;
 pub mod power_sum;
+pub mod signal_processing;
 pub mod simulation;
+pub mod special;
 pub mod stepped_sine;
+pub mod vector_fitting;
 
 pub use error::{ParameterError, SolveError};
 pub use harmonic_balance::{
-    backbone, sweep_levels, Formulation, ForcedResponse, Fold, Jump, NoMotion, PhaseQuadrature, RootSet,
-    SteadyState, Sweep, SweepDirection, SweepPoint,
+    backbone, sweep_levels, Fold, ForcedResponse, Formulation, Jump, NoMotion, PhaseQuadrature,
+    RootSet, SteadyState, Sweep, SweepDirection, SweepPoint,
 };
 pub use model::{Model, NormalisedModel};
 pub use power_law::PowerLaw;

@@ -41,21 +41,33 @@ fn finite(name: &'static str, v: f64) -> Result<(), ParameterError> {
 impl Model {
     /// Linear model `m x'' + c x' + k x = m γ`.
     pub fn linear(mass: f64, stiffness: f64, damping: f64) -> Result<Self, ParameterError> {
-        let m = Self { mass, stiffness, damping, nonlinear_stiffness: None, nonlinear_damping: None };
+        let m = Self {
+            mass,
+            stiffness,
+            damping,
+            nonlinear_stiffness: None,
+            nonlinear_damping: None,
+        };
         m.validate()?;
         Ok(m)
     }
 
     /// Adds (or replaces) the nonlinear stiffness term `k_r x|x|^ρ`.
     pub fn with_stiffness(mut self, k_r: f64, rho: f64) -> Result<Self, ParameterError> {
-        self.nonlinear_stiffness = Some(PowerLaw { coefficient: k_r, exponent: rho });
+        self.nonlinear_stiffness = Some(PowerLaw {
+            coefficient: k_r,
+            exponent: rho,
+        });
         self.validate()?;
         Ok(self)
     }
 
     /// Adds (or replaces) the nonlinear damping term `c_e x'|x'|^η`.
     pub fn with_damping(mut self, c_e: f64, eta: f64) -> Result<Self, ParameterError> {
-        self.nonlinear_damping = Some(PowerLaw { coefficient: c_e, exponent: eta });
+        self.nonlinear_damping = Some(PowerLaw {
+            coefficient: c_e,
+            exponent: eta,
+        });
         self.validate()?;
         Ok(self)
     }
@@ -67,13 +79,22 @@ impl Model {
         finite("stiffness", self.stiffness)?;
         finite("damping", self.damping)?;
         if self.mass <= 0.0 {
-            return Err(ParameterError::NotPositive { name: "mass", value: self.mass });
+            return Err(ParameterError::NotPositive {
+                name: "mass",
+                value: self.mass,
+            });
         }
         if self.stiffness <= 0.0 {
-            return Err(ParameterError::NotPositive { name: "stiffness", value: self.stiffness });
+            return Err(ParameterError::NotPositive {
+                name: "stiffness",
+                value: self.stiffness,
+            });
         }
         if self.damping < 0.0 {
-            return Err(ParameterError::Negative { name: "damping", value: self.damping });
+            return Err(ParameterError::Negative {
+                name: "damping",
+                value: self.damping,
+            });
         }
         if let Some(t) = self.nonlinear_stiffness {
             finite("nonlinear_stiffness.coefficient", t.coefficient)?;
@@ -160,13 +181,22 @@ impl NormalisedModel {
         check_exponent("rho", self.rho)?;
         check_exponent("eta", self.eta)?;
         if self.alpha <= 0.0 {
-            return Err(ParameterError::NotPositive { name: "alpha", value: self.alpha });
+            return Err(ParameterError::NotPositive {
+                name: "alpha",
+                value: self.alpha,
+            });
         }
         if self.delta < 0.0 {
-            return Err(ParameterError::Negative { name: "delta", value: self.delta });
+            return Err(ParameterError::Negative {
+                name: "delta",
+                value: self.delta,
+            });
         }
         if self.kappa < 0.0 {
-            return Err(ParameterError::Negative { name: "kappa", value: self.kappa });
+            return Err(ParameterError::Negative {
+                name: "kappa",
+                value: self.kappa,
+            });
         }
         Ok(())
     }
@@ -187,10 +217,14 @@ impl NormalisedModel {
             mass,
             stiffness: self.alpha * mass,
             damping: self.delta * mass,
-            nonlinear_stiffness: (self.beta != 0.0)
-                .then_some(PowerLaw { coefficient: self.beta * mass, exponent: self.rho }),
-            nonlinear_damping: (self.kappa != 0.0)
-                .then_some(PowerLaw { coefficient: self.kappa * mass, exponent: self.eta }),
+            nonlinear_stiffness: (self.beta != 0.0).then_some(PowerLaw {
+                coefficient: self.beta * mass,
+                exponent: self.rho,
+            }),
+            nonlinear_damping: (self.kappa != 0.0).then_some(PowerLaw {
+                coefficient: self.kappa * mass,
+                exponent: self.eta,
+            }),
         };
         m.validate()?;
         Ok(m)
@@ -221,15 +255,24 @@ mod tests {
     fn validation_reports_offending_value() {
         assert_eq!(
             Model::linear(-1.0, 1.0, 0.0).unwrap_err(),
-            ParameterError::NotPositive { name: "mass", value: -1.0 }
+            ParameterError::NotPositive {
+                name: "mass",
+                value: -1.0
+            }
         );
         assert_eq!(
             Model::linear(1.0, 0.0, 0.0).unwrap_err(),
-            ParameterError::NotPositive { name: "stiffness", value: 0.0 }
+            ParameterError::NotPositive {
+                name: "stiffness",
+                value: 0.0
+            }
         );
         assert_eq!(
             Model::linear(1.0, 1.0, -0.5).unwrap_err(),
-            ParameterError::Negative { name: "damping", value: -0.5 }
+            ParameterError::Negative {
+                name: "damping",
+                value: -0.5
+            }
         );
         assert!(matches!(
             Model::linear(f64::NAN, 1.0, 0.0).unwrap_err(),

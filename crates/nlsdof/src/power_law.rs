@@ -131,15 +131,20 @@ pub fn g_odd(mu: i64) -> Result<f64, ParameterError> {
     if mu <= -3 || mu.rem_euclid(2) != 1 {
         return Err(ParameterError::NotOddExponent { value: mu });
     }
-    Ok(factorial((mu + 1) / 2) / (std::f64::consts::PI * double_factorial(mu + 2))
-        * 2f64.powi(((5 + mu) / 2) as i32))
+    Ok(
+        factorial((mu + 1) / 2) / (std::f64::consts::PI * double_factorial(mu + 2))
+            * 2f64.powi(((5 + mu) / 2) as i32),
+    )
 }
 
 /// Unified integer closed form, Eq 26: [`g_even`] for even and [`g_odd`] for
 /// odd `μ > −3`.
 pub fn g_integer(mu: i64) -> Result<f64, ParameterError> {
     if mu <= -3 {
-        return Err(ParameterError::ExponentTooSmall { name: "mu", value: mu as f64 });
+        return Err(ParameterError::ExponentTooSmall {
+            name: "mu",
+            value: mu as f64,
+        });
     }
     if mu % 2 == 0 {
         g_even(mu)
@@ -162,10 +167,16 @@ impl PowerLaw {
     /// New term; checks the exponent and that the coefficient is finite.
     pub fn new(coefficient: f64, exponent: f64) -> Result<Self, ParameterError> {
         if !coefficient.is_finite() {
-            return Err(ParameterError::NotFinite { name: "coefficient", value: coefficient });
+            return Err(ParameterError::NotFinite {
+                name: "coefficient",
+                value: coefficient,
+            });
         }
         check_exponent("exponent", exponent)?;
-        Ok(Self { coefficient, exponent })
+        Ok(Self {
+            coefficient,
+            exponent,
+        })
     }
 
     /// The force `coefficient · y |y|^exponent` (zero at `y = 0` for
@@ -238,10 +249,19 @@ mod tests {
 
     #[test]
     fn domain_errors() {
-        assert!(matches!(g(-3.0), Err(ParameterError::ExponentTooSmall { .. })));
-        assert!(matches!(g(-7.5), Err(ParameterError::ExponentTooSmall { .. })));
+        assert!(matches!(
+            g(-3.0),
+            Err(ParameterError::ExponentTooSmall { .. })
+        ));
+        assert!(matches!(
+            g(-7.5),
+            Err(ParameterError::ExponentTooSmall { .. })
+        ));
         assert!(matches!(g(f64::NAN), Err(ParameterError::NotFinite { .. })));
-        assert!(matches!(g(f64::INFINITY), Err(ParameterError::NotFinite { .. })));
+        assert!(matches!(
+            g(f64::INFINITY),
+            Err(ParameterError::NotFinite { .. })
+        ));
         assert!(g_integer(-3).is_err());
         assert!(g_even(3).is_err());
         assert!(g_odd(4).is_err());
@@ -253,7 +273,10 @@ mod tests {
             let exact = g(mu as f64).unwrap();
             let closed = g_integer(mu).unwrap();
             let rel = (closed - exact).abs() / exact;
-            assert!(rel < 1e-13, "mu={mu}: Eq 26 {closed} vs Gamma {exact} (rel {rel:e})");
+            assert!(
+                rel < 1e-13,
+                "mu={mu}: Eq 26 {closed} vs Gamma {exact} (rel {rel:e})"
+            );
             let specific = if mu % 2 == 0 { g_even(mu) } else { g_odd(mu) }.unwrap();
             assert_eq!(specific, closed);
         }
@@ -298,7 +321,10 @@ mod tests {
             // DE quadrature loses accuracy for the strongest endpoint
             // singularity (μ+2 → −1): allow 1e-6 there, 1e-11 elsewhere.
             let tol = if mu < -2.5 { 1e-6 } else { 1e-11 };
-            assert!(rel < tol, "mu={mu}: quad {quad} vs Gamma {exact} (rel {rel:e})");
+            assert!(
+                rel < tol,
+                "mu={mu}: quad {quad} vs Gamma {exact} (rel {rel:e})"
+            );
             mu += 0.37;
         }
     }

@@ -73,7 +73,11 @@ impl PowerSum {
             }
         }
         let log_abs = coefficients.iter().map(|c| c.abs().ln()).collect();
-        Self { exponents, coefficients, log_abs }
+        Self {
+            exponents,
+            coefficients,
+            log_abs,
+        }
     }
 
     /// Number of (non-zero) terms.
@@ -99,7 +103,10 @@ impl PowerSum {
     /// Sign changes of the coefficient sequence: an upper bound on the
     /// number of positive roots (generalised Descartes rule).
     pub fn sign_changes(&self) -> usize {
-        self.coefficients.windows(2).filter(|w| (w[0] > 0.0) != (w[1] > 0.0)).count()
+        self.coefficients
+            .windows(2)
+            .filter(|w| (w[0] > 0.0) != (w[1] > 0.0))
+            .count()
     }
 
     /// Sign of `f` as `x → 0⁺` (`t → −∞`) and as `x → ∞`.
@@ -118,7 +125,12 @@ impl PowerSum {
             m = m.max(l + e * t);
         }
         let mut s = 0.0;
-        for ((l, e), c) in self.log_abs.iter().zip(&self.exponents).zip(&self.coefficients) {
+        for ((l, e), c) in self
+            .log_abs
+            .iter()
+            .zip(&self.exponents)
+            .zip(&self.coefficients)
+        {
             s += c.signum() * (l + e * t - m).exp();
         }
         s
@@ -126,7 +138,11 @@ impl PowerSum {
 
     /// Plain evaluation `Σ cᵢ x^{eᵢ}` (may overflow for extreme `x`).
     pub fn eval(&self, x: f64) -> f64 {
-        self.exponents.iter().zip(&self.coefficients).map(|(e, c)| c * x.powf(*e)).sum()
+        self.exponents
+            .iter()
+            .zip(&self.coefficients)
+            .map(|(e, c)| c * x.powf(*e))
+            .sum()
     }
 
     /// `d/dt [e^{−e₁ t} F(t)]` as a power sum in `x` (exponents shifted by
@@ -353,7 +369,10 @@ mod tests {
             Some(b) => b,
             None => return vec![],
         };
-        p.roots_in(lo - 1.0, hi + 1.0, None, None).into_iter().map(f64::exp).collect()
+        p.roots_in(lo - 1.0, hi + 1.0, None, None)
+            .into_iter()
+            .map(f64::exp)
+            .collect()
     }
 
     #[test]
@@ -390,10 +409,16 @@ mod tests {
         // d/dt [x^0 (f)] = x f'(x) has the sign of 2x − 2 − d
         let second = |t: f64| 2.0 * t.exp() - 2.0 - d;
         let (lo, hi) = p.root_bounds().unwrap();
-        let r: Vec<f64> =
-            p.roots_in(lo - 1.0, hi + 1.0, Some(&top), Some(&second)).into_iter().map(f64::exp).collect();
+        let r: Vec<f64> = p
+            .roots_in(lo - 1.0, hi + 1.0, Some(&top), Some(&second))
+            .into_iter()
+            .map(f64::exp)
+            .collect();
         assert_eq!(r.len(), 2, "{r:?}");
-        assert!((r[0] - 1.0).abs() < 1e-12 && (r[1] - 1.0 - d).abs() < 1e-12, "{r:?}");
+        assert!(
+            (r[0] - 1.0).abs() < 1e-12 && (r[1] - 1.0 - d).abs() < 1e-12,
+            "{r:?}"
+        );
     }
 
     #[test]

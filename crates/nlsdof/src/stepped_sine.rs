@@ -122,21 +122,39 @@ pub struct RigSweep {
 }
 
 fn check_options(o: &RigOptions) -> Result<(), SimulationError> {
-    let bad = |name, value: f64, reason| Err(SimulationError::InvalidOption { name, value, reason });
+    let bad = |name, value: f64, reason| {
+        Err(SimulationError::InvalidOption {
+            name,
+            value,
+            reason,
+        })
+    };
     if o.samples_per_cycle < 16 {
-        return bad("samples per cycle", o.samples_per_cycle as f64, "must be >= 16");
+        return bad(
+            "samples per cycle",
+            o.samples_per_cycle as f64,
+            "must be >= 16",
+        );
     }
     if !(o.tolerance.is_finite() && o.tolerance > 0.0) {
         return bad("settling tolerance", o.tolerance, "must be > 0");
     }
     if !(o.min_decay_times.is_finite() && o.min_decay_times >= 0.0) {
-        return bad("minimum dwell (decay times)", o.min_decay_times, "must be >= 0");
+        return bad(
+            "minimum dwell (decay times)",
+            o.min_decay_times,
+            "must be >= 0",
+        );
     }
     if o.min_cycles < 4 {
         return bad("minimum cycles", o.min_cycles as f64, "must be >= 4");
     }
     if o.max_cycles < o.min_cycles {
-        return bad("maximum cycles", o.max_cycles as f64, "must be >= minimum cycles");
+        return bad(
+            "maximum cycles",
+            o.max_cycles as f64,
+            "must be >= minimum cycles",
+        );
     }
     if o.consecutive == 0 {
         return bad("consecutive cycles", 0.0, "must be >= 1");
@@ -153,14 +171,20 @@ fn check_omegas(omegas: &[f64]) -> Result<(), SimulationError> {
     }
     for (i, &w) in omegas.iter().enumerate() {
         if !(w.is_finite() && w > 0.0) {
-            return Err(SimulationError::InvalidOption { name: "omega", value: w, reason: "must be finite and > 0" });
+            return Err(SimulationError::InvalidOption {
+                name: "omega",
+                value: w,
+                reason: "must be finite and > 0",
+            });
         }
         if i > 0 && w <= omegas[i - 1] {
-            return Err(SimulationError::Parameter(crate::error::ParameterError::NotIncreasing {
-                index: i,
-                value: w,
-                previous: omegas[i - 1],
-            }));
+            return Err(SimulationError::Parameter(
+                crate::error::ParameterError::NotIncreasing {
+                    index: i,
+                    value: w,
+                    previous: omegas[i - 1],
+                },
+            ));
         }
     }
     Ok(())
@@ -171,7 +195,9 @@ fn check_omegas(omegas: &[f64]) -> Result<(), SimulationError> {
 pub fn effective_decay_rate(model: &NormalisedModel, a: f64, omega: f64) -> f64 {
     let mut d = model.delta;
     if model.kappa > 0.0 && a > 0.0 {
-        let deq = crate::power_law::g_unchecked(model.eta) * model.kappa * (omega * a).abs().powf(model.eta);
+        let deq = crate::power_law::g_unchecked(model.eta)
+            * model.kappa
+            * (omega * a).abs().powf(model.eta);
         if deq.is_finite() {
             d += deq;
         }
@@ -207,10 +233,18 @@ pub fn run_with_progress(
     check_options(options)?;
     check_omegas(omegas)?;
     if !(gamma.is_finite() && gamma > 0.0) {
-        return Err(SimulationError::InvalidOption { name: "gamma", value: gamma, reason: "must be finite and > 0" });
+        return Err(SimulationError::InvalidOption {
+            name: "gamma",
+            value: gamma,
+            reason: "must be finite and > 0",
+        });
     }
     if !(initial.x.is_finite() && initial.v.is_finite()) {
-        return Err(SimulationError::InvalidOption { name: "initial state", value: f64::NAN, reason: "not finite" });
+        return Err(SimulationError::InvalidOption {
+            name: "initial state",
+            value: f64::NAN,
+            reason: "not finite",
+        });
     }
     let order: Vec<f64> = match direction {
         SweepDirection::Up => omegas.to_vec(),
@@ -220,7 +254,16 @@ pub fn run_with_progress(
     dispatch(
         model,
         coulomb,
-        Rig { model: *model, gamma, omegas: &order, direction, o: *options, initial, coulomb, progress },
+        Rig {
+            model: *model,
+            gamma,
+            omegas: &order,
+            direction,
+            o: *options,
+            initial,
+            coulomb,
+            progress,
+        },
     )
 }
 
@@ -237,8 +280,13 @@ pub fn run_levels(
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<RigSweep, SimulationError>>>> = Mutex::new(vec![None; gammas.len()]);
-    let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1).min(gammas.len()).max(1);
+    let results: Mutex<Vec<Option<Result<RigSweep, SimulationError>>>> =
+        Mutex::new(vec![None; gammas.len()]);
+    let threads = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+        .min(gammas.len())
+        .max(1);
     std::thread::scope(|sc| {
         for _ in 0..threads {
             sc.spawn(|| loop {
@@ -246,7 +294,15 @@ pub fn run_levels(
                 if k >= gammas.len() {
                     break;
                 }
-                let r = run_with_progress(model, gammas[k], omegas, direction, options, State::default(), progress);
+                let r = run_with_progress(
+                    model,
+                    gammas[k],
+                    omegas,
+                    direction,
+                    options,
+                    State::default(),
+                    progress,
+                );
                 results.lock().expect("no panics while holding the lock")[k] = Some(r);
             });
         }
@@ -283,13 +339,30 @@ impl Visit for Rig<'_> {
     type Out = Result<RigSweep, SimulationError>;
 
     fn go<S: Law, D: Law>(self, d: Dyn<S, D>) -> Self::Out {
-        let Rig { model, gamma, omegas, direction, o, initial, coulomb, progress } = self;
+        let Rig {
+            model,
+            gamma,
+            omegas,
+            direction,
+            o,
+            initial,
+            coulomb,
+            progress,
+        } = self;
         let n = o.samples_per_cycle;
         // cos(π j / N), j = 0 .. 2N: input at whole and half samples; DFT weights
-        let table: Vec<f64> = (0..=2 * n).map(|j| (PI * j as f64 / n as f64).cos()).collect();
-        let sin_table: Vec<f64> = (0..2 * n).map(|j| (PI * j as f64 / n as f64).sin()).collect();
+        let table: Vec<f64> = (0..=2 * n)
+            .map(|j| (PI * j as f64 / n as f64).cos())
+            .collect();
+        let sin_table: Vec<f64> = (0..2 * n)
+            .map(|j| (PI * j as f64 / n as f64).sin())
+            .collect();
         let mut st = initial;
-        let mut mode = if coulomb { coulomb::initial_mode(&d, model.kappa, st.x, st.v, gamma) } else { Mode::Stick };
+        let mut mode = if coulomb {
+            coulomb::initial_mode(&d, model.kappa, st.x, st.v, gamma)
+        } else {
+            Mode::Stick
+        };
         let mut counters = Summary::default();
         let mut t = 0.0;
         let mut points = Vec::with_capacity(omegas.len());
@@ -306,7 +379,11 @@ impl Visit for Rig<'_> {
             let mut residual = f64::INFINITY;
             let mut settled = false;
             while cycles < o.max_cycles {
-                let mut cs = CycleStats { max: st.x, min: st.x, ..Default::default() };
+                let mut cs = CycleStats {
+                    max: st.x,
+                    min: st.x,
+                    ..Default::default()
+                };
                 for j in 0..n {
                     let (x0, v0) = (st.x, st.v);
                     // DFT of x at phases θ_j = 2π j / N for harmonics 1..3
@@ -322,7 +399,17 @@ impl Visit for Rig<'_> {
                         let th0 = TAU * j as f64 / n as f64;
                         let u = |tau: f64| gamma * (th0 + omega * tau).cos();
                         let (mut x1, mut v1) = (x0, v0);
-                        coulomb::rk4_interval(&d, model.kappa, h, &u, t, &mut x1, &mut v1, &mut mode, &mut counters)?;
+                        coulomb::rk4_interval(
+                            &d,
+                            model.kappa,
+                            h,
+                            &u,
+                            t,
+                            &mut x1,
+                            &mut v1,
+                            &mut mode,
+                            &mut counters,
+                        )?;
                         st = State { x: x1, v: v1 };
                     } else {
                         let a1 = u0 - d.internal(x0, v0);
@@ -330,7 +417,11 @@ impl Visit for Rig<'_> {
                         st = State { x: x1, v: v1 };
                     }
                     if !(st.x.is_finite() && st.v.is_finite()) {
-                        return Err(SimulationError::Diverged { t: t + h, x: st.x, v: st.v });
+                        return Err(SimulationError::Diverged {
+                            t: t + h,
+                            x: st.x,
+                            v: st.v,
+                        });
                     }
                     // extremum inside the step: cubic Hermite at the linear v-zero
                     if (v0 > 0.0) != (st.v > 0.0) && v0 != st.v {
@@ -347,7 +438,13 @@ impl Visit for Rig<'_> {
                         hist_left -= 1;
                         if hist_left == 0 {
                             hist_left = dec;
-                            history.push(Sample { index: history.len(), t, u: u1, x: st.x, v: st.v });
+                            history.push(Sample {
+                                index: history.len(),
+                                t,
+                                u: u1,
+                                x: st.x,
+                                v: st.v,
+                            });
                         }
                     }
                 }
@@ -380,9 +477,15 @@ impl Visit for Rig<'_> {
                         f64::INFINITY
                     }
                 };
-                passes = if residual < o.tolerance { passes + 1 } else { 0 };
+                passes = if residual < o.tolerance {
+                    passes + 1
+                } else {
+                    0
+                };
                 let min_dwell = if sigma > 0.0 {
-                    (o.min_decay_times / (sigma * period)).ceil().min(o.max_cycles as f64) as usize
+                    (o.min_decay_times / (sigma * period))
+                        .ceil()
+                        .min(o.max_cycles as f64) as usize
                 } else {
                     o.max_cycles
                 };
@@ -393,8 +496,16 @@ impl Visit for Rig<'_> {
             }
             let amplitude = last.re[0].hypot(last.im[0]);
             // x ≈ Re(X₁ e^{iθ}) = |X₁| cos(θ + arg X₁): lag φ = −arg X₁
-            let phase = if amplitude > 0.0 { -last.im[0].atan2(last.re[0]) } else { 0.0 };
-            let phase = if phase < -0.5 * PI { phase + TAU } else { phase };
+            let phase = if amplitude > 0.0 {
+                -last.im[0].atan2(last.re[0])
+            } else {
+                0.0
+            };
+            let phase = if phase < -0.5 * PI {
+                phase + TAU
+            } else {
+                phase
+            };
             points.push(RigPoint {
                 omega,
                 amplitude,
@@ -408,7 +519,14 @@ impl Visit for Rig<'_> {
             });
             progress();
         }
-        Ok(RigSweep { gamma, direction, points, history, final_state: st, duration: t })
+        Ok(RigSweep {
+            gamma,
+            direction,
+            points,
+            history,
+            final_state: st,
+            duration: t,
+        })
     }
 }
 
@@ -417,5 +535,10 @@ impl Visit for Rig<'_> {
 fn hermite(s: f64) -> (f64, f64, f64, f64) {
     let s2 = s * s;
     let s3 = s2 * s;
-    (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2)
+    (
+        2.0 * s3 - 3.0 * s2 + 1.0,
+        s3 - 2.0 * s2 + s,
+        -2.0 * s3 + 3.0 * s2,
+        s3 - s2,
+    )
 }

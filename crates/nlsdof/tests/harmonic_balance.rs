@@ -19,7 +19,9 @@ fn linear_limit_equals_exact_sdof_frf() {
     let m = Model::linear(0.26699, 306.7878, 0.1164).unwrap();
     let gamma = 0.41;
     let r = ForcedResponse::new(&m, gamma, Formulation::HarmonicBalance).unwrap();
-    let omegas: Vec<f64> = (0..400).map(|i| 2.0 * PI * (0.5 + 0.025 * i as f64)).collect();
+    let omegas: Vec<f64> = (0..400)
+        .map(|i| 2.0 * PI * (0.5 + 0.025 * i as f64))
+        .collect();
     for &w in &omegas {
         let set = r.steady_states(w).unwrap();
         assert_eq!(set.roots.len(), 1);
@@ -38,7 +40,11 @@ fn linear_limit_equals_exact_sdof_frf() {
         }
     }
     // zero-coefficient nonlinear terms are the linear model too
-    let m0 = m.with_stiffness(0.0, 2.0).unwrap().with_damping(0.0, 1.0).unwrap();
+    let m0 = m
+        .with_stiffness(0.0, 2.0)
+        .unwrap()
+        .with_damping(0.0, 1.0)
+        .unwrap();
     let r0 = ForcedResponse::new(&m0, gamma, Formulation::HarmonicBalance).unwrap();
     let w = 2.0 * PI * 5.3;
     let (a, _) = linear_frf(&m, gamma, w);
@@ -69,8 +75,14 @@ impl Rng {
 /// a²[(k + g(ρ)k_r a^ρ − mΩ²)² + (Ω(c + g(η)c_e Ω^η a^η))²] − (mγ)²,
 /// built directly from the physical parameters.
 fn squared_polynomial(m: &Model, gamma: f64, w: f64, a0: f64) -> Vec<f64> {
-    let (kr, rho) = m.nonlinear_stiffness.map(|t| (t.coefficient, t.exponent as usize)).unwrap();
-    let (ce, eta) = m.nonlinear_damping.map(|t| (t.coefficient, t.exponent as usize)).unwrap();
+    let (kr, rho) = m
+        .nonlinear_stiffness
+        .map(|t| (t.coefficient, t.exponent as usize))
+        .unwrap();
+    let (ce, eta) = m
+        .nonlinear_damping
+        .map(|t| (t.coefficient, t.exponent as usize))
+        .unwrap();
     let deg = 2 + 2 * rho.max(eta);
     let mut p = vec![0.0; deg + 1];
     // S(y) = s0 + s1 y^rho ; D(y) = d0 + d1 y^eta (in units of force / a)
@@ -140,7 +152,8 @@ fn integer_exponents_match_companion_matrix_roots_of_squared_polynomial() {
         let kr_strength = rng.range(-0.5, 2.0);
         let kr = kr_strength * mass * wn * wn / (g(rho as f64).unwrap() * a_res.powi(rho as i32));
         let ce_strength = rng.range(0.0, 3.0);
-        let ce = ce_strength * 2.0 * zeta * mass * wn / (g(eta as f64).unwrap() * (wn * a_res).powi(eta as i32));
+        let ce = ce_strength * 2.0 * zeta * mass * wn
+            / (g(eta as f64).unwrap() * (wn * a_res).powi(eta as i32));
         let model = Model::linear(mass, mass * wn * wn, 2.0 * zeta * mass * wn)
             .unwrap()
             .with_stiffness(kr, rho as f64)
@@ -155,13 +168,18 @@ fn integer_exponents_match_companion_matrix_roots_of_squared_polynomial() {
         // scale by the linear resonance amplitude so the coefficients are O(1)
         // (the companion-matrix eigenvalues are meaningless otherwise)
         let poly = squared_polynomial(&model, gamma, w, a_res);
-        let Some(oracle) = companion_positive_roots(&poly) else { continue };
+        let Some(oracle) = companion_positive_roots(&poly) else {
+            continue;
+        };
         tested += 1;
         assert_eq!(
             ours.roots.len(),
             oracle.len(),
             "rho={rho} eta={eta} ours={:?} oracle={:?}",
-            ours.roots.iter().map(|r| r.amplitude / a_res).collect::<Vec<_>>(),
+            ours.roots
+                .iter()
+                .map(|r| r.amplitude / a_res)
+                .collect::<Vec<_>>(),
             oracle
         );
         if oracle.len() > 1 {
@@ -169,18 +187,29 @@ fn integer_exponents_match_companion_matrix_roots_of_squared_polynomial() {
         }
         for (r, y) in ours.roots.iter().zip(&oracle) {
             let a = y * a_res;
-            assert!((r.amplitude - a).abs() <= 1e-7 * a, "{} vs {} (rho {rho} eta {eta} poly {poly:?})", r.amplitude, a);
+            assert!(
+                (r.amplitude - a).abs() <= 1e-7 * a,
+                "{} vs {} (rho {rho} eta {eta} poly {poly:?})",
+                r.amplitude,
+                a
+            );
         }
     }
     assert!(tested >= 200, "only {tested} unambiguous cases");
-    assert!(multi >= 10, "only {multi} cases with several roots: the test is not probing folds");
+    assert!(
+        multi >= 10,
+        "only {multi} cases with several roots: the test is not probing folds"
+    );
 }
 
 /// Strong hardening Duffing, exact HB: f_n = 10 Hz, ζ = 0.01.
 fn duffing() -> Model {
     let m = 1.0;
     let wn = 2.0 * PI * 10.0;
-    Model::linear(m, wn * wn, 2.0 * 0.01 * wn).unwrap().with_stiffness(4.0e7, 2.0).unwrap()
+    Model::linear(m, wn * wn, 2.0 * 0.01 * wn)
+        .unwrap()
+        .with_stiffness(4.0e7, 2.0)
+        .unwrap()
 }
 
 /// Classical fold condition of the exact first-order HB Duffing equation,
@@ -192,10 +221,15 @@ fn duffing_exact_folds(m: &Model, gamma: f64) -> Vec<f64> {
     let a0 = gamma / (wn * wn);
     let b = 0.75 * m.nonlinear_stiffness.unwrap().coefficient / m.mass * a0 * a0 / (wn * wn);
     let z2 = zeta * zeta;
-    let q = |y: f64| 16.0 * z2 * b.powi(3) * y.powi(5) + 16.0 * z2 * b * b * y.powi(4) - 4.0 * b * b * y.powi(3)
-        + 8.0 * z2 * b * y * y
-        + 1.0;
-    bisect_all(&q, 1e-3, 1e9).into_iter().map(|y| wn * (1.0 + b * y + 1.0 / (2.0 * b * y * y)).sqrt()).collect()
+    let q = |y: f64| {
+        16.0 * z2 * b.powi(3) * y.powi(5) + 16.0 * z2 * b * b * y.powi(4) - 4.0 * b * b * y.powi(3)
+            + 8.0 * z2 * b * y * y
+            + 1.0
+    };
+    bisect_all(&q, 1e-3, 1e9)
+        .into_iter()
+        .map(|y| wn * (1.0 + b * y + 1.0 / (2.0 * b * y * y)).sqrt())
+        .collect()
 }
 
 /// Nayfeh–Mook fold condition of the modulation equations (Eq 30 form):
@@ -257,29 +291,65 @@ fn duffing_folds_match_closed_forms_and_sweeps_show_hysteresis() {
         let exact = duffing_exact_folds(&m, gamma);
         let r = ForcedResponse::new(&m, gamma, Formulation::HarmonicBalance).unwrap();
         let folds = r.folds(lo, hi).unwrap();
-        let inside: Vec<f64> = exact.iter().copied().filter(|w| *w > lo && *w < hi).collect();
-        assert_eq!(folds.len(), inside.len(), "gamma={gamma}: {folds:?} vs {exact:?}");
-        assert_eq!(inside.len(), 2, "gamma={gamma}: test case must have hysteresis in band");
+        let inside: Vec<f64> = exact
+            .iter()
+            .copied()
+            .filter(|w| *w > lo && *w < hi)
+            .collect();
+        assert_eq!(
+            folds.len(),
+            inside.len(),
+            "gamma={gamma}: {folds:?} vs {exact:?}"
+        );
+        assert_eq!(
+            inside.len(),
+            2,
+            "gamma={gamma}: test case must have hysteresis in band"
+        );
         for (f, w) in folds.iter().zip(&inside) {
-            assert!((f.omega - w).abs() <= 1e-10 * w, "gamma={gamma}: fold {} vs closed form {}", f.omega, w);
+            assert!(
+                (f.omega - w).abs() <= 1e-10 * w,
+                "gamma={gamma}: fold {} vs closed form {}",
+                f.omega,
+                w
+            );
         }
         // lower fold: pair born above it; upper fold: pair dies above it
         assert!(folds[0].pair_above && !folds[1].pair_above);
 
-        let modf = ForcedResponse::new(&m, gamma, Formulation::Modulation).unwrap().folds(lo, hi).unwrap();
-        let nm: Vec<f64> = duffing_modulation_folds(&m, gamma).into_iter().filter(|w| *w > lo && *w < hi).collect();
+        let modf = ForcedResponse::new(&m, gamma, Formulation::Modulation)
+            .unwrap()
+            .folds(lo, hi)
+            .unwrap();
+        let nm: Vec<f64> = duffing_modulation_folds(&m, gamma)
+            .into_iter()
+            .filter(|w| *w > lo && *w < hi)
+            .collect();
         assert_eq!(modf.len(), nm.len(), "{modf:?} vs {nm:?}");
         for (f, w) in modf.iter().zip(&nm) {
-            assert!((f.omega - w).abs() <= 1e-10 * w, "modulation fold {} vs Nayfeh–Mook {}", f.omega, w);
+            assert!(
+                (f.omega - w).abs() <= 1e-10 * w,
+                "modulation fold {} vs Nayfeh–Mook {}",
+                f.omega,
+                w
+            );
         }
 
-        let omegas: Vec<f64> = (0..200).map(|i| lo + (hi - lo) * i as f64 / 199.0).collect();
+        let omegas: Vec<f64> = (0..200)
+            .map(|i| lo + (hi - lo) * i as f64 / 199.0)
+            .collect();
         let up = r.sweep(&omegas, SweepDirection::Up).unwrap();
         let down = r.sweep(&omegas, SweepDirection::Down).unwrap();
         assert_eq!(up.jumps.len(), 1, "sweep up: {:?}", up.jumps);
         assert_eq!(down.jumps.len(), 1, "sweep down: {:?}", down.jumps);
-        assert!(up.jumps[0].amplitude_after < up.jumps[0].amplitude_before, "sweep up jumps down");
-        assert!(down.jumps[0].amplitude_after > down.jumps[0].amplitude_before, "sweep down jumps up");
+        assert!(
+            up.jumps[0].amplitude_after < up.jumps[0].amplitude_before,
+            "sweep up jumps down"
+        );
+        assert!(
+            down.jumps[0].amplitude_after > down.jumps[0].amplitude_before,
+            "sweep down jumps up"
+        );
         assert!((up.jumps[0].omega - inside[1]).abs() <= 1e-10 * inside[1]);
         assert!((down.jumps[0].omega - inside[0]).abs() <= 1e-10 * inside[0]);
         assert!(up.points.iter().all(|p| p.stable) && down.points.iter().all(|p| p.stable));
@@ -299,14 +369,25 @@ fn branch_following_does_not_depend_on_step_size() {
     let m = duffing();
     let r = ForcedResponse::new(&m, 1.0, Formulation::HarmonicBalance).unwrap();
     let (lo, hi) = (2.0 * PI * 8.0, 2.0 * PI * 16.0);
-    let grid = |n: usize| -> Vec<f64> { (0..n).map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64).collect() };
+    let grid = |n: usize| -> Vec<f64> {
+        (0..n)
+            .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+            .collect()
+    };
     for dir in [SweepDirection::Up, SweepDirection::Down] {
         let coarse = r.sweep(&grid(11), dir).unwrap();
         let fine = r.sweep(&grid(1001), dir).unwrap();
         assert_eq!(coarse.jumps, fine.jumps);
         for p in &coarse.points {
-            let q = fine.points.iter().find(|q| (q.omega - p.omega).abs() < 1e-9 * p.omega).unwrap();
-            assert!((p.amplitude - q.amplitude).abs() <= 1e-12 * p.amplitude, "{p:?} vs {q:?}");
+            let q = fine
+                .points
+                .iter()
+                .find(|q| (q.omega - p.omega).abs() < 1e-9 * p.omega)
+                .unwrap();
+            assert!(
+                (p.amplitude - q.amplitude).abs() <= 1e-12 * p.amplitude,
+                "{p:?} vs {q:?}"
+            );
         }
     }
 }
@@ -322,14 +403,19 @@ fn sweep_starting_inside_hysteresis_settles_from_rest() {
     // starting from rest inside the window (beyond the linear resonance) the
     // slow flow goes to the small-amplitude branch
     let s = r.sweep(&[mid, mid * 1.0001], SweepDirection::Up).unwrap();
-    assert!((s.points[0].amplitude - set.roots[0].amplitude).abs() < 1e-12 * set.roots[0].amplitude);
+    assert!(
+        (s.points[0].amplitude - set.roots[0].amplitude).abs() < 1e-12 * set.roots[0].amplitude
+    );
 }
 
 #[test]
 fn coulomb_friction_sticks_exactly_when_theory_says() {
     // friction force c_f; sticking iff 4 c_f / π >= m γ
     let (mass, cf) = (2.0, 3.0);
-    let m = Model::linear(mass, 5000.0, 0.8).unwrap().with_damping(cf, -1.0).unwrap();
+    let m = Model::linear(mass, 5000.0, 0.8)
+        .unwrap()
+        .with_damping(cf, -1.0)
+        .unwrap();
     let gamma_crit = 4.0 * cf / (PI * mass);
     let w = 0.9 * m.omega_n();
     let stuck = ForcedResponse::new(&m, gamma_crit * (1.0 - 1e-9), Formulation::HarmonicBalance)
@@ -338,19 +424,26 @@ fn coulomb_friction_sticks_exactly_when_theory_says() {
         .unwrap();
     assert!(stuck.roots.is_empty());
     match stuck.no_motion {
-        Some(NoMotion::Sticking { friction_accel, input_accel }) => {
+        Some(NoMotion::Sticking {
+            friction_accel,
+            input_accel,
+        }) => {
             assert!((friction_accel - gamma_crit).abs() < 1e-12 * gamma_crit);
             assert!(input_accel < friction_accel);
         }
         other => panic!("expected sticking, got {other:?}"),
     }
     let gamma = 3.0 * gamma_crit;
-    let moving = ForcedResponse::new(&m, gamma, Formulation::HarmonicBalance).unwrap().steady_states(w).unwrap();
+    let moving = ForcedResponse::new(&m, gamma, Formulation::HarmonicBalance)
+        .unwrap()
+        .steady_states(w)
+        .unwrap();
     assert_eq!(moving.roots.len(), 1);
     // check against the closed form with c_eq = 4 c_f / (π Ω a):
     // a²(k − mΩ²)² + (cΩa + 4c_f/π)² = (mγ)²
     let a = moving.roots[0].amplitude;
-    let lhs = (a * (m.stiffness - mass * w * w)).powi(2) + (m.damping * w * a + 4.0 * cf / PI).powi(2);
+    let lhs =
+        (a * (m.stiffness - mass * w * w)).powi(2) + (m.damping * w * a + 4.0 * cf / PI).powi(2);
     assert!((lhs - (mass * gamma).powi(2)).abs() < 1e-12 * (mass * gamma).powi(2));
     // In first-order HB the sticking condition does not depend on Ω
     // (c_eq Ω a = 4c_f/π): a sweep either sticks everywhere or nowhere.
@@ -361,7 +454,10 @@ fn coulomb_friction_sticks_exactly_when_theory_says() {
     let above = ForcedResponse::new(&m, 1.05 * gamma_crit, Formulation::HarmonicBalance).unwrap();
     for dir in [SweepDirection::Up, SweepDirection::Down] {
         let s = above.sweep(&omegas, dir).unwrap();
-        assert!(s.points.iter().all(|p| !p.sticking && p.amplitude > 0.0 && p.phase.is_finite()));
+        assert!(s
+            .points
+            .iter()
+            .all(|p| !p.sticking && p.amplitude > 0.0 && p.phase.is_finite()));
     }
 }
 
@@ -378,9 +474,16 @@ fn phase_quadrature_is_at_ninety_degrees_on_the_backbone() {
             let r = ForcedResponse::new(&m, gamma, form).unwrap();
             let pq = r.phase_quadrature().unwrap().unwrap();
             let set = r.steady_states(pq.omega).unwrap();
-            let root = set.roots.iter().find(|s| (s.amplitude - pq.amplitude).abs() < 1e-9 * pq.amplitude);
+            let root = set
+                .roots
+                .iter()
+                .find(|s| (s.amplitude - pq.amplitude).abs() < 1e-9 * pq.amplitude);
             let root = root.expect("PQ amplitude is a steady state at the PQ frequency");
-            assert!((root.phase - PI / 2.0).abs() < 1e-9, "{form:?}: phase {}", root.phase);
+            assert!(
+                (root.phase - PI / 2.0).abs() < 1e-9,
+                "{form:?}: phase {}",
+                root.phase
+            );
             let bb = backbone(&m.normalised().unwrap(), pq.amplitude, form).unwrap();
             assert!((bb - pq.omega).abs() < 1e-12 * bb);
         }
@@ -396,7 +499,12 @@ fn backbone_closed_forms() {
     assert!((backbone(&n, a, Formulation::HarmonicBalance).unwrap() - exact).abs() < 1e-12 * exact);
     let approx = n.omega_n() * (1.0 + 0.75 * n.beta * a * a / (2.0 * n.alpha));
     assert!((backbone(&n, a, Formulation::Modulation).unwrap() - approx).abs() < 1e-12 * approx);
-    let soft = Model::linear(1.0, 100.0, 0.1).unwrap().with_stiffness(-100.0, 2.0).unwrap().normalised().unwrap();
+    let soft = Model::linear(1.0, 100.0, 0.1)
+        .unwrap()
+        .with_stiffness(-100.0, 2.0)
+        .unwrap()
+        .normalised()
+        .unwrap();
     assert!(backbone(&soft, 2.0, Formulation::HarmonicBalance).is_none());
 }
 
@@ -418,12 +526,21 @@ fn modulation_form_is_eq30_explicitly() {
         assert!(lo < pq.omega && hi > pq.omega);
         for w in [lo, hi] {
             let set = r.steady_states(w).unwrap();
-            assert!(set.roots.iter().any(|s| (s.amplitude - a).abs() < 1e-9 * a), "a={a} w={w} {set:?}");
+            assert!(
+                set.roots.iter().any(|s| (s.amplitude - a).abs() < 1e-9 * a),
+                "a={a} w={w} {set:?}"
+            );
         }
     }
-    assert!(modulation_frequencies(&m, gamma, 1.01 * pq.amplitude).unwrap().is_none());
+    assert!(modulation_frequencies(&m, gamma, 1.01 * pq.amplitude)
+        .unwrap()
+        .is_none());
     // near resonance and weak damping the approximation is close to the exact form
-    let exact = ForcedResponse::new(&m, gamma, Formulation::HarmonicBalance).unwrap().phase_quadrature().unwrap().unwrap();
+    let exact = ForcedResponse::new(&m, gamma, Formulation::HarmonicBalance)
+        .unwrap()
+        .phase_quadrature()
+        .unwrap()
+        .unwrap();
     assert!((exact.amplitude - pq.amplitude).abs() < 0.02 * exact.amplitude);
     assert!((exact.omega - pq.omega).abs() < 1e-3 * exact.omega);
 }
@@ -431,14 +548,23 @@ fn modulation_form_is_eq30_explicitly() {
 #[test]
 fn sweep_leaves_a_state_that_loses_stability_without_a_fold() {
     // η = −2.5 < −2: the Hopf (trace) criterion can fail with no fold.
-    let m = Model::linear(1.0, 1000.0, 0.5).unwrap().with_damping(0.05, -2.5).unwrap();
+    let m = Model::linear(1.0, 1000.0, 0.5)
+        .unwrap()
+        .with_damping(0.05, -2.5)
+        .unwrap();
     let r = ForcedResponse::new(&m, 5.0, Formulation::HarmonicBalance).unwrap();
-    let omegas: Vec<f64> = (0..50).map(|i| 2.0 * PI * (3.0 + 4.0 * i as f64 / 49.0)).collect();
+    let omegas: Vec<f64> = (0..50)
+        .map(|i| 2.0 * PI * (3.0 + 4.0 * i as f64 / 49.0))
+        .collect();
     let s = r.sweep(&omegas, SweepDirection::Up).unwrap();
     for p in &s.points {
         let set = r.steady_states(p.omega).unwrap();
         if set.roots.iter().any(|q| q.stable) && !p.sticking {
-            assert!(p.stable, "at {} rad/s a stable state exists but the sweep reports {p:?}", p.omega);
+            assert!(
+                p.stable,
+                "at {} rad/s a stable state exists but the sweep reports {p:?}",
+                p.omega
+            );
         }
     }
 }
@@ -446,20 +572,30 @@ fn sweep_leaves_a_state_that_loses_stability_without_a_fold() {
 #[test]
 fn softening_phase_quadrature_is_the_resonance_peak() {
     let wn = 2.0 * PI * 10.0;
-    let m = Model::linear(1.0, wn * wn, 2.0 * 0.01 * wn).unwrap().with_stiffness(-1.2e7, 2.0).unwrap();
+    let m = Model::linear(1.0, wn * wn, 2.0 * 0.01 * wn)
+        .unwrap()
+        .with_stiffness(-1.2e7, 2.0)
+        .unwrap();
     let r = ForcedResponse::new(&m, 0.5, Formulation::HarmonicBalance).unwrap();
     let pq = r.phase_quadrature().unwrap().unwrap();
     // softening: the peak leans below f_n, but stays near it at this level
     let f = pq.omega / (2.0 * PI);
     assert!(f > 9.0 && f < 10.0, "PQ at {f} Hz");
     // it is the largest amplitude of the swept curve (the resonance peak)
-    let omegas: Vec<f64> = (0..2001).map(|i| 2.0 * PI * (8.0 + 4.0 * i as f64 / 2000.0)).collect();
+    let omegas: Vec<f64> = (0..2001)
+        .map(|i| 2.0 * PI * (8.0 + 4.0 * i as f64 / 2000.0))
+        .collect();
     let peak = omegas
         .iter()
         .flat_map(|&w| r.steady_states(w).unwrap().roots)
         .map(|s| s.amplitude)
         .fold(0.0, f64::max);
-    assert!((pq.amplitude - peak).abs() < 1e-3 * peak, "{} vs peak {}", pq.amplitude, peak);
+    assert!(
+        (pq.amplitude - peak).abs() < 1e-3 * peak,
+        "{} vs peak {}",
+        pq.amplitude,
+        peak
+    );
 }
 
 /// Documents (does not hide) the paper's internal inconsistency: Table 7's
@@ -487,9 +623,17 @@ fn table8_discrepancy_is_what_we_document() {
             .unwrap()
             .unwrap();
         let ratio = pq.amplitude / table8_model_a[i];
-        assert!(ratio > 0.98 && ratio < 1.0, "level {i}: a_PQ {} m, ratio to Table 8 {ratio}", pq.amplitude);
+        assert!(
+            ratio > 0.98 && ratio < 1.0,
+            "level {i}: a_PQ {} m, ratio to Table 8 {ratio}",
+            pq.amplitude
+        );
         let df = pq.omega / (2.0 * PI) / table8_model_f[i] - 1.0;
-        assert!(df < 0.0 && df > -0.002, "level {i}: f_PQ {} Hz ({df:+e})", pq.omega / (2.0 * PI));
+        assert!(
+            df < 0.0 && df > -0.002,
+            "level {i}: f_PQ {} Hz ({df:+e})",
+            pq.omega / (2.0 * PI)
+        );
     }
 }
 
@@ -497,10 +641,22 @@ fn table8_discrepancy_is_what_we_document() {
 fn parallel_levels_equal_sequential() {
     let m = duffing();
     let gammas = [0.25, 0.5, 1.0, 2.0];
-    let omegas: Vec<f64> = (0..300).map(|i| 2.0 * PI * (8.0 + 12.0 * i as f64 / 299.0)).collect();
-    let par = sweep_levels(&m, &gammas, &omegas, SweepDirection::Down, Formulation::HarmonicBalance).unwrap();
+    let omegas: Vec<f64> = (0..300)
+        .map(|i| 2.0 * PI * (8.0 + 12.0 * i as f64 / 299.0))
+        .collect();
+    let par = sweep_levels(
+        &m,
+        &gammas,
+        &omegas,
+        SweepDirection::Down,
+        Formulation::HarmonicBalance,
+    )
+    .unwrap();
     for (g, p) in gammas.iter().zip(&par) {
-        let seq = ForcedResponse::new(&m, *g, Formulation::HarmonicBalance).unwrap().sweep(&omegas, SweepDirection::Down).unwrap();
+        let seq = ForcedResponse::new(&m, *g, Formulation::HarmonicBalance)
+            .unwrap()
+            .sweep(&omegas, SweepDirection::Down)
+            .unwrap();
         assert_eq!(&seq, p);
     }
 }
@@ -544,10 +700,18 @@ fn narrow_hysteresis_window_near_the_cusp_is_found() {
 /// (slow-flow) equations dX/dτ = −i(1 − Z(|X|)X), Z = S + iD, from a small
 /// perturbation of each steady state (X* = x e^{−iφ}) and see whether it
 /// returns (stable) or leaves (unstable).
-fn slow_flow_returns(eq: &nlsdof::harmonic_balance::ResponseEquation, x: f64, phase: f64, kick: (f64, f64)) -> bool {
+fn slow_flow_returns(
+    eq: &nlsdof::harmonic_balance::ResponseEquation,
+    x: f64,
+    phase: f64,
+    kick: (f64, f64),
+) -> bool {
     let z = |re: f64, im: f64| {
         let a = re.hypot(im);
-        (eq.s0 + eq.s1 * a.powf(eq.rho), eq.d0 + eq.d1 * a.powf(eq.eta))
+        (
+            eq.s0 + eq.s1 * a.powf(eq.rho),
+            eq.d0 + eq.d1 * a.powf(eq.eta),
+        )
     };
     let f = |re: f64, im: f64| {
         let (s, d) = z(re, im);
@@ -589,22 +753,35 @@ fn stability_flags_agree_with_slow_flow_integration() {
         assert_eq!(set.roots.len(), 3);
         for s in &set.roots {
             let x = s.amplitude / (1.0 / m.omega_n().powi(2));
-            let back = slow_flow_returns(&eq, x, s.phase, (1e-3, 1e-3)) && slow_flow_returns(&eq, x, s.phase, (-1e-3, 0.0));
+            let back = slow_flow_returns(&eq, x, s.phase, (1e-3, 1e-3))
+                && slow_flow_returns(&eq, x, s.phase, (-1e-3, 0.0));
             assert_eq!(back, s.stable, "Duffing w={w} root {s:?}");
-            if s.stable { checked.0 += 1 } else { checked.1 += 1 }
+            if s.stable {
+                checked.0 += 1
+            } else {
+                checked.1 += 1
+            }
         }
     }
     // η = −2.5: Hopf instability without a fold
-    let m = Model::linear(1.0, 1000.0, 0.5).unwrap().with_damping(0.05, -2.5).unwrap();
+    let m = Model::linear(1.0, 1000.0, 0.5)
+        .unwrap()
+        .with_damping(0.05, -2.5)
+        .unwrap();
     let r = ForcedResponse::new(&m, 5.0, Formulation::HarmonicBalance).unwrap();
     for f_hz in [4.0, 5.0, 6.0] {
         let w = 2.0 * PI * f_hz;
         let eq = r.equation(w);
         for s in &r.steady_states(w).unwrap().roots {
             let x = s.amplitude / (5.0 / m.omega_n().powi(2));
-            let back = slow_flow_returns(&eq, x, s.phase, (1e-3, 1e-3)) && slow_flow_returns(&eq, x, s.phase, (-1e-3, 0.0));
+            let back = slow_flow_returns(&eq, x, s.phase, (1e-3, 1e-3))
+                && slow_flow_returns(&eq, x, s.phase, (-1e-3, 0.0));
             assert_eq!(back, s.stable, "eta=-2.5 f={f_hz} root {s:?}");
-            if s.stable { checked.0 += 1 } else { checked.1 += 1 }
+            if s.stable {
+                checked.0 += 1
+            } else {
+                checked.1 += 1
+            }
         }
     }
     assert!(checked.0 >= 6 && checked.1 >= 4, "{checked:?}");

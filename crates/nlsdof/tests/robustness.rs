@@ -22,7 +22,8 @@ fn model(
     let a_res = gamma / (wn * wn) / (2.0 * zeta);
     // k_eq(a_res)/k = stiff_strength, c_eq(a_res, ω_n)/c = damp_strength
     let kr = stiff_strength * m * wn * wn / (power_law::g(rho).unwrap() * a_res.powf(rho));
-    let ce = damp_strength.abs() * 2.0 * zeta * m * wn / (power_law::g(eta).unwrap() * (wn * a_res).powf(eta));
+    let ce = damp_strength.abs() * 2.0 * zeta * m * wn
+        / (power_law::g(eta).unwrap() * (wn * a_res).powf(eta));
     Model::linear(m, m * wn * wn, 2.0 * zeta * m * wn)
         .unwrap()
         .with_stiffness(kr, rho)
@@ -96,7 +97,10 @@ fn invalid_inputs_are_typed_errors() {
     let r = ForcedResponse::new(&m, 1.0, Formulation::HarmonicBalance).unwrap();
     assert!(matches!(
         ForcedResponse::new(&m, f64::NAN, Formulation::HarmonicBalance),
-        Err(SolveError::Parameter(ParameterError::NotFinite { name: "gamma", .. }))
+        Err(SolveError::Parameter(ParameterError::NotFinite {
+            name: "gamma",
+            ..
+        }))
     ));
     assert!(matches!(
         ForcedResponse::new(&m, -1.0, Formulation::HarmonicBalance),
@@ -106,16 +110,25 @@ fn invalid_inputs_are_typed_errors() {
     assert!(r.steady_states(f64::NAN).is_err());
     assert!(matches!(
         r.sweep(&[1.0, 2.0, 2.0], SweepDirection::Up),
-        Err(SolveError::Parameter(ParameterError::NotIncreasing { index: 2, .. }))
+        Err(SolveError::Parameter(ParameterError::NotIncreasing {
+            index: 2,
+            ..
+        }))
     ));
     assert!(matches!(
         r.sweep(&[], SweepDirection::Up),
         Err(SolveError::Parameter(ParameterError::Empty { .. }))
     ));
-    assert!(matches!(r.folds(5.0, 1.0), Err(SolveError::Parameter(ParameterError::InvalidRange { .. }))));
+    assert!(matches!(
+        r.folds(5.0, 1.0),
+        Err(SolveError::Parameter(ParameterError::InvalidRange { .. }))
+    ));
     let bad = Model { mass: -1.0, ..m };
     assert!(matches!(
         ForcedResponse::new(&bad, 1.0, Formulation::HarmonicBalance),
-        Err(SolveError::Parameter(ParameterError::NotPositive { name: "mass", .. }))
+        Err(SolveError::Parameter(ParameterError::NotPositive {
+            name: "mass",
+            ..
+        }))
     ));
 }

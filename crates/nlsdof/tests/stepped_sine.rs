@@ -6,7 +6,7 @@
 use nlsdof::excitation::Excitation;
 use nlsdof::simulation::{simulate_excitation, Method, Options, State};
 use nlsdof::stepped_sine::{run, run_levels, RigOptions, RigSweep};
-use nlsdof::{Formulation, ForcedResponse, Model, SweepDirection};
+use nlsdof::{ForcedResponse, Formulation, Model, SweepDirection};
 use std::f64::consts::{PI, TAU};
 
 fn wing() -> Model {
@@ -22,7 +22,9 @@ fn wing() -> Model {
 const LEVELS_PP: [f64; 5] = [0.82, 1.24, 1.62, 2.00, 2.46];
 
 fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
-    (0..n).map(|k| a + (b - a) * k as f64 / (n - 1) as f64).collect()
+    (0..n)
+        .map(|k| a + (b - a) * k as f64 / (n - 1) as f64)
+        .collect()
 }
 
 /// Linear oscillator: every rig point equals the closed-form steady state
@@ -36,7 +38,15 @@ fn linear_rig_settles_to_the_exact_steady_state() {
     let omegas = linspace(TAU * 5.2, TAU * 5.6, 41);
     let gamma = 0.41;
     for dir in [SweepDirection::Up, SweepDirection::Down] {
-        let sw = run(&m, gamma, &omegas, dir, &RigOptions::default(), State::default()).unwrap();
+        let sw = run(
+            &m,
+            gamma,
+            &omegas,
+            dir,
+            &RigOptions::default(),
+            State::default(),
+        )
+        .unwrap();
         assert_eq!(sw.points.len(), omegas.len());
         for p in &sw.points {
             let (re, im) = (m.alpha - p.omega * p.omega, m.delta * p.omega);
@@ -45,7 +55,11 @@ fn linear_rig_settles_to_the_exact_steady_state() {
             let ea = (p.amplitude - exact).abs() / exact;
             let ep = (p.phase - phase).abs().to_degrees();
             assert!(p.settled, "{dir:?} f = {} Hz not settled", p.omega / TAU);
-            assert!(ea < 2e-4 && ep < 0.02, "{dir:?} f = {:.4} Hz: amplitude error {ea:e}, phase error {ep}°", p.omega / TAU);
+            assert!(
+                ea < 2e-4 && ep < 0.02,
+                "{dir:?} f = {:.4} Hz: amplitude error {ea:e}, phase error {ep}°",
+                p.omega / TAU
+            );
             assert!(p.harmonic2 < 1e-6 * exact && p.harmonic3 < 1e-6 * exact);
             assert!((p.peak_to_peak - 2.0 * exact).abs() < 1e-3 * exact);
             assert!((0.0..=PI).contains(&p.phase));
@@ -67,7 +81,10 @@ impl Excitation for Cosine {
 /// rig's rule (geometric tail bound + minimum dwell) lands within 1e-4.
 #[test]
 fn naive_one_percent_rule_is_badly_wrong_for_light_damping() {
-    let m = Model::linear(0.26699, 306.7878, 0.1164).unwrap().normalised().unwrap();
+    let m = Model::linear(0.26699, 306.7878, 0.1164)
+        .unwrap()
+        .normalised()
+        .unwrap();
     let w = (m.alpha - 0.5 * m.delta * m.delta).sqrt(); // amplitude resonance
     let gamma = 0.41;
     let exact = gamma / (m.alpha - w * w).hypot(m.delta * w);
@@ -80,7 +97,12 @@ fn naive_one_percent_rule_is_badly_wrong_for_light_damping() {
         0.0,
         TAU / w / n as f64,
         n * cycles + 1,
-        &Options { method: Method::Rk4 { samples_per_step: 1 }, ..Default::default() },
+        &Options {
+            method: Method::Rk4 {
+                samples_per_step: 1,
+            },
+            ..Default::default()
+        },
         |s| xs.push(s.x),
     )
     .unwrap();
@@ -93,15 +115,29 @@ fn naive_one_percent_rule_is_badly_wrong_for_light_damping() {
         }
         2.0 / n as f64 * re.hypot(im)
     };
-    let naive = (1..cycles).find(|&c| ((amp(c) - amp(c - 1)) / amp(c)).abs() < 0.01).unwrap();
+    let naive = (1..cycles)
+        .find(|&c| ((amp(c) - amp(c - 1)) / amp(c)).abs() < 0.01)
+        .unwrap();
     let naive_err = (amp(naive) - exact).abs() / exact;
     println!("naive rule stops after {naive} cycles with error {naive_err:.3}");
     assert!(naive_err > 0.1, "naive rule error only {naive_err}");
-    let sw = run(&m, gamma, &[w], SweepDirection::Up, &RigOptions::default(), State::default()).unwrap();
+    let sw = run(
+        &m,
+        gamma,
+        &[w],
+        SweepDirection::Up,
+        &RigOptions::default(),
+        State::default(),
+    )
+    .unwrap();
     let p = sw.points[0];
     let err = (p.amplitude - exact).abs() / exact;
     println!("rig: {} cycles, error {err:e}", p.cycles);
-    assert!(p.settled && err < 1e-4, "rig error {err:e} after {} cycles", p.cycles);
+    assert!(
+        p.settled && err < 1e-4,
+        "rig error {err:e} after {} cycles",
+        p.cycles
+    );
 }
 
 fn hb_amplitude(model: &Model, gamma: f64, omega: f64, near: f64) -> f64 {
@@ -126,24 +162,57 @@ fn wing_rig_matches_harmonic_balance_within_half_percent() {
     let m = model.normalised().unwrap();
     let omegas: Vec<f64> = (0..200).map(|k| TAU * (5.3 + 0.001 * k as f64)).collect();
     let gammas: Vec<f64> = LEVELS_PP.iter().map(|pp| 0.5 * pp).collect();
-    let sweeps: Vec<RigSweep> = run_levels(&m, &gammas, &omegas, SweepDirection::Up, &RigOptions::default(), &|| {}).unwrap();
+    let sweeps: Vec<RigSweep> = run_levels(
+        &m,
+        &gammas,
+        &omegas,
+        SweepDirection::Up,
+        &RigOptions::default(),
+        &|| {},
+    )
+    .unwrap();
     let mut worst = (0.0f64, 0.0f64);
     for sw in &sweeps {
         let fr = ForcedResponse::new(&model, sw.gamma, Formulation::HarmonicBalance).unwrap();
         for p in &sw.points {
-            assert!(p.settled, "γ = {} f = {} Hz not settled", sw.gamma, p.omega / TAU);
+            assert!(
+                p.settled,
+                "γ = {} f = {} Hz not settled",
+                sw.gamma,
+                p.omega / TAU
+            );
             let rs = fr.steady_states(p.omega).unwrap();
             assert_eq!(rs.roots.len(), 1, "the wing has a single steady state");
             let hb = rs.roots[0];
             let ea = (p.amplitude - hb.amplitude).abs() / hb.amplitude;
             let ep = (p.phase - hb.phase).abs().to_degrees();
             worst = (worst.0.max(ea), worst.1.max(ep));
-            assert!(ea < 0.005, "γ = {} f = {:.4} Hz: rig {} vs HB {} ({ea:e})", sw.gamma, p.omega / TAU, p.amplitude, hb.amplitude);
-            assert!(ep < 0.5, "γ = {} f = {:.4} Hz: phase {} vs HB {}", sw.gamma, p.omega / TAU, p.phase, hb.phase);
+            assert!(
+                ea < 0.005,
+                "γ = {} f = {:.4} Hz: rig {} vs HB {} ({ea:e})",
+                sw.gamma,
+                p.omega / TAU,
+                p.amplitude,
+                hb.amplitude
+            );
+            assert!(
+                ep < 0.5,
+                "γ = {} f = {:.4} Hz: phase {} vs HB {}",
+                sw.gamma,
+                p.omega / TAU,
+                p.phase,
+                hb.phase
+            );
         }
     }
-    let cycles: usize = sweeps.iter().flat_map(|s| s.points.iter().map(|p| p.cycles)).sum();
-    println!("wing rig vs HB: worst amplitude error {:.3e}, phase {:.3}°, {cycles} cycles", worst.0, worst.1);
+    let cycles: usize = sweeps
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.cycles))
+        .sum();
+    println!(
+        "wing rig vs HB: worst amplitude error {:.3e}, phase {:.3}°, {cycles} cycles",
+        worst.0, worst.1
+    );
 }
 
 /// Strong Duffing (ζ = 1 %, β a²/α ≈ 0.4 at the peak, resonance shifted
@@ -154,7 +223,10 @@ fn wing_rig_matches_harmonic_balance_within_half_percent() {
 /// branch being followed.
 #[test]
 fn strong_duffing_rig_jumps_at_the_fold_within_one_step() {
-    let model = Model::linear(1.0, 1.0, 0.02).unwrap().with_stiffness(0.5, 2.0).unwrap();
+    let model = Model::linear(1.0, 1.0, 0.02)
+        .unwrap()
+        .with_stiffness(0.5, 2.0)
+        .unwrap();
     let m = model.normalised().unwrap();
     let gamma = 0.02;
     let omegas = linspace(0.9, 1.3, 161);
@@ -173,14 +245,25 @@ fn strong_duffing_rig_jumps_at_the_fold_within_one_step() {
             .max_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap();
         let (w0, w1) = (pts[k].omega, pts[k + 1].omega);
-        let fold = if dir == SweepDirection::Up { upper } else { lower };
+        let fold = if dir == SweepDirection::Up {
+            upper
+        } else {
+            lower
+        };
         println!(
             "{dir:?}: jump between {w0:.5} and {w1:.5} rad/s (amplitude ×{:.2}), HB fold {fold:.5}, step {step:.5}",
             ratio.exp()
         );
-        assert!(ratio > 1.5f64.ln(), "no jump found (largest ratio {})", ratio.exp());
+        assert!(
+            ratio > 1.5f64.ln(),
+            "no jump found (largest ratio {})",
+            ratio.exp()
+        );
         let (lo, hi) = (w0.min(w1), w0.max(w1));
-        assert!(lo - step <= fold && fold <= hi + step, "{dir:?}: jump [{lo}, {hi}] vs fold {fold}");
+        assert!(
+            lo - step <= fold && fold <= hi + step,
+            "{dir:?}: jump [{lo}, {hi}] vs fold {fold}"
+        );
         // branch followed: compare to the HB root nearest the rig amplitude,
         // away from the jump (two steps) where slow settling is legitimate
         for (i, p) in pts.iter().enumerate() {
@@ -189,7 +272,13 @@ fn strong_duffing_rig_jumps_at_the_fold_within_one_step() {
             }
             let hb = hb_amplitude(&model, gamma, p.omega, p.amplitude);
             let e = (p.amplitude - hb).abs() / hb;
-            assert!(e < 0.02, "{dir:?} ω = {}: rig {} vs HB {} ({e:e})", p.omega, p.amplitude, hb);
+            assert!(
+                e < 0.02,
+                "{dir:?} ω = {}: rig {} vs HB {} ({e:e})",
+                p.omega,
+                p.amplitude,
+                hb
+            );
         }
     }
 }

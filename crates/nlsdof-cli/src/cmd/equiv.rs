@@ -71,13 +71,22 @@ fn closed_form(mu: f64) -> Option<(f64, &'static str)> {
     }
     let n = mu as i64;
     let v = g_integer(n).ok()?;
-    v.is_finite().then_some((v, if n % 2 == 0 { "Eq 17 even" } else { "Eq 25 odd" }))
+    v.is_finite().then_some((
+        v,
+        if n % 2 == 0 {
+            "Eq 17 even"
+        } else {
+            "Eq 25 odd"
+        },
+    ))
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
     let mu = args.mu;
     let value = g(mu).map_err(|e| {
-        CliError::Usage(format!("--mu {mu} is not allowed (need a finite real number > -3): {e}"))
+        CliError::Usage(format!(
+            "--mu {mu} is not allowed (need a finite real number > -3): {e}"
+        ))
     })?;
     let closed = closed_form(mu);
     let name = special_name(mu);
@@ -100,7 +109,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "closed form, Eq 26 ({formula}) = {v}   (difference {:.1e})",
             (v - value).abs()
         ),
-        None if mu.fract() == 0.0 => println!("closed form: its factorials overflow f64 at this mu"),
+        None if mu.fract() == 0.0 => {
+            println!("closed form: its factorials overflow f64 at this mu")
+        }
         None => println!("closed form: none (mu is not an integer)"),
     }
     if let Some(n) = name {

@@ -2,7 +2,9 @@
 //! stepped-sine sweep sees them (jumps, folds, phase quadrature), as text,
 //! JSON or CSV, optionally plotted to SVG.
 
-use super::roots::{check_frequency, check_gamma, conventions_help, load_model, model_summary, FormulationArg};
+use super::roots::{
+    check_frequency, check_gamma, conventions_help, load_model, model_summary, FormulationArg,
+};
 use crate::error::CliError;
 use crate::plot;
 use nlsdof::{ForcedResponse, NoMotion, PhaseQuadrature, Sweep, SweepDirection};
@@ -134,7 +136,13 @@ fn parse_gammas(text: &str) -> Result<Vec<f64>, CliError> {
 fn linspace(f_min: f64, f_max: f64, steps: usize) -> Vec<f64> {
     let n = steps - 1;
     (0..steps)
-        .map(|i| if i == n { f_max } else { f_min + (f_max - f_min) * (i as f64 / n as f64) })
+        .map(|i| {
+            if i == n {
+                f_max
+            } else {
+                f_min + (f_max - f_min) * (i as f64 / n as f64)
+            }
+        })
         .collect()
 }
 
@@ -183,7 +191,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let response = ForcedResponse::new(&model, gamma, formulation)?;
         let sweep = response.sweep(&omegas, args.sweep.to_core())?;
         let phase_quadrature = response.phase_quadrature()?;
-        levels.push(Level { gamma, response, sweep, phase_quadrature });
+        levels.push(Level {
+            gamma,
+            response,
+            sweep,
+            phase_quadrature,
+        });
     }
 
     let mut stdout_text = if args.json {
@@ -197,7 +210,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(path) = &args.plot {
         let title = format!(
             "{} - {}, sweep {}",
-            args.model.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+            args.model
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
             args.formulation.description(),
             args.sweep.name()
         );
@@ -286,7 +302,11 @@ fn csv_output(levels: &[Level]) -> String {
             nlsdof::SweepDirection::Down => "down",
         };
         for p in &l.sweep.points {
-            let phase = if p.sticking { String::new() } else { format!("{}", p.phase.to_degrees()) };
+            let phase = if p.sticking {
+                String::new()
+            } else {
+                format!("{}", p.phase.to_degrees())
+            };
             let _ = writeln!(
                 s,
                 "{},{},{},{},{},{},{},{}",
@@ -304,9 +324,20 @@ fn csv_output(levels: &[Level]) -> String {
     s
 }
 
-fn text_output(args: &Args, model: &nlsdof::Model, levels: &[Level], f_min: f64, f_max: f64) -> String {
+fn text_output(
+    args: &Args,
+    model: &nlsdof::Model,
+    levels: &[Level],
+    f_min: f64,
+    f_max: f64,
+) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "model {}: {}", args.model.display(), model_summary(model));
+    let _ = writeln!(
+        s,
+        "model {}: {}",
+        args.model.display(),
+        model_summary(model)
+    );
     let _ = writeln!(
         s,
         "stepped-sine sweep {}, {} .. {} Hz, {} steps; formulation {} ({})",
@@ -317,7 +348,10 @@ fn text_output(args: &Args, model: &nlsdof::Model, levels: &[Level], f_min: f64,
         args.formulation.name(),
         args.formulation.description()
     );
-    let _ = writeln!(s, "amplitudes zero-to-peak in m; phase = lag of x behind the input, deg");
+    let _ = writeln!(
+        s,
+        "amplitudes zero-to-peak in m; phase = lag of x behind the input, deg"
+    );
     for (i, l) in levels.iter().enumerate() {
         let _ = writeln!(s);
         let _ = writeln!(
@@ -349,15 +383,33 @@ fn text_output(args: &Args, model: &nlsdof::Model, levels: &[Level], f_min: f64,
         }
         let sticking = l.sweep.points.iter().filter(|p| p.sticking).count();
         if let Some(first) = l.sweep.points.iter().find(|p| p.sticking) {
-            let why = match l.response.steady_states(first.omega).ok().and_then(|r| r.no_motion) {
+            let why = match l
+                .response
+                .steady_states(first.omega)
+                .ok()
+                .and_then(|r| r.no_motion)
+            {
                 Some(NoMotion::Sticking { .. }) => "Coulomb friction sticks",
                 _ => "no steady-state root",
             };
-            let _ = writeln!(s, "  no motion          at {} of {} steps ({why})", sticking, l.sweep.points.len());
+            let _ = writeln!(
+                s,
+                "  no motion          at {} of {} steps ({why})",
+                sticking,
+                l.sweep.points.len()
+            );
         }
-        let unstable = l.sweep.points.iter().filter(|p| !p.sticking && !p.stable).count();
+        let unstable = l
+            .sweep
+            .points
+            .iter()
+            .filter(|p| !p.sticking && !p.stable)
+            .count();
         if unstable > 0 {
-            let _ = writeln!(s, "  no stable state    at {unstable} steps (followed state unstable)");
+            let _ = writeln!(
+                s,
+                "  no stable state    at {unstable} steps (followed state unstable)"
+            );
         }
         if l.sweep.jumps.is_empty() {
             let _ = writeln!(s, "  jumps              none");
@@ -369,14 +421,23 @@ fn text_output(args: &Args, model: &nlsdof::Model, levels: &[Level], f_min: f64,
                 hz(j.omega),
                 j.amplitude_before,
                 j.amplitude_after,
-                if j.amplitude_after > j.amplitude_before { "up" } else { "down" }
+                if j.amplitude_after > j.amplitude_before {
+                    "up"
+                } else {
+                    "down"
+                }
             );
         }
         if l.sweep.folds.is_empty() {
             let _ = writeln!(s, "  folds              none in the band");
         }
         for f in &l.sweep.folds {
-            let _ = writeln!(s, "  fold               at {:.6} Hz, amplitude {:.6e} m", hz(f.omega), f.amplitude);
+            let _ = writeln!(
+                s,
+                "  fold               at {:.6} Hz, amplitude {:.6e} m",
+                hz(f.omega),
+                f.amplitude
+            );
         }
         match l.phase_quadrature {
             Some(q) => {
@@ -385,7 +446,11 @@ fn text_output(args: &Args, model: &nlsdof::Model, levels: &[Level], f_min: f64,
                     "  phase quadrature   {:.6} Hz, amplitude {:.6e} m{}",
                     hz(q.omega),
                     q.amplitude,
-                    if hz(q.omega) < f_min || hz(q.omega) > f_max { " (outside the band)" } else { "" }
+                    if hz(q.omega) < f_min || hz(q.omega) > f_max {
+                        " (outside the band)"
+                    } else {
+                        ""
+                    }
                 );
             }
             None => {

@@ -1,6 +1,10 @@
 //! One module per CLI verb.
+pub mod compare;
 pub mod equiv;
+pub mod fit;
 pub mod frf;
+pub mod frf_estimate;
+pub mod linear_id;
 pub mod roots;
 pub mod signal;
 pub mod simulate;

@@ -218,7 +218,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         });
         match set.no_motion {
             None => {}
-            Some(NoMotion::Sticking { friction_accel, input_accel }) => {
+            Some(NoMotion::Sticking {
+                friction_accel,
+                input_accel,
+            }) => {
                 out["no_motion"] = json!("sticking");
                 out["friction_accel"] = json!(friction_accel);
                 out["input_accel"] = json!(input_accel);
@@ -238,7 +241,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.formulation.description()
     );
     match set.no_motion {
-        Some(NoMotion::Sticking { friction_accel, input_accel }) => {
+        Some(NoMotion::Sticking {
+            friction_accel,
+            input_accel,
+        }) => {
             println!("no steady motion: the mass sticks");
             println!(
                 "Coulomb friction sticks: 4 c_f/pi = {} N >= m gamma = {} N",
@@ -252,7 +258,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         None => {
             let n = set.roots.len();
             println!("{n} steady state{}:", if n == 1 { "" } else { "s" });
-            println!("  {:>2}  {:>14}  {:>15}  stability", "#", "amplitude [m]", "phase lag [deg]");
+            println!(
+                "  {:>2}  {:>14}  {:>15}  stability",
+                "#", "amplitude [m]", "phase lag [deg]"
+            );
             for (i, r) in set.roots.iter().enumerate() {
                 println!(
                     "  {:>2}  {:>14.6e}  {:>15.4}  {}",

@@ -106,7 +106,9 @@ fn positive(flag: &str, v: f64) -> Result<f64, CliError> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(CliError::Usage(format!("{flag} {v} is not allowed: must be a finite number > 0")))
+        Err(CliError::Usage(format!(
+            "{flag} {v} is not allowed: must be a finite number > 0"
+        )))
     }
 }
 
@@ -117,7 +119,9 @@ fn write<E: Excitation>(e: &E, c: &Common, duration: f64) -> Result<(), CliError
     let fs = c.fs;
     let n = (duration * fs).floor() + 1.0;
     if n > MAX_SAMPLES {
-        return Err(CliError::Usage(format!("{n} samples is too many (duration {duration} s at {fs} Hz)")));
+        return Err(CliError::Usage(format!(
+            "{n} samples is too many (duration {duration} s at {fs} Hz)"
+        )));
     }
     let n = n as u64;
     let mut w = CsvWriter::create(&c.out, &["t", "accel"])?;
@@ -131,18 +135,37 @@ fn write<E: Excitation>(e: &E, c: &Common, duration: f64) -> Result<(), CliError
     }
     w.commit()?;
     progress.finish();
-    println!("wrote {n} samples ({duration} s at {fs} Hz) to {}", c.out.display());
+    println!(
+        "wrote {n} samples ({duration} s at {fs} Hz) to {}",
+        c.out.display()
+    );
     Ok(())
 }
 
 pub fn run(a: Args) -> Result<(), CliError> {
     match a.kind {
-        Kind::Sine { common, freq, duration, phase_deg } => {
+        Kind::Sine {
+            common,
+            freq,
+            duration,
+            phase_deg,
+        } => {
             positive("--fs", common.fs)?;
-            let s = Sine::new(common.amplitude, TAU * positive("--freq", freq)?, phase_deg.to_radians())?;
+            let s = Sine::new(
+                common.amplitude,
+                TAU * positive("--freq", freq)?,
+                phase_deg.to_radians(),
+            )?;
             write(&s, &common, positive("--duration", duration)?)
         }
-        Kind::Chirp { common, kind, f0, f1, rate, duration } => {
+        Kind::Chirp {
+            common,
+            kind,
+            f0,
+            f1,
+            rate,
+            duration,
+        } => {
             positive("--fs", common.fs)?;
             positive("--f0", f0)?;
             match kind {
@@ -161,29 +184,50 @@ pub fn run(a: Args) -> Result<(), CliError> {
                         }
                     };
                     if !rate.is_finite() {
-                        return Err(CliError::Usage(format!("--rate {rate} is not a finite number")));
+                        return Err(CliError::Usage(format!(
+                            "--rate {rate} is not a finite number"
+                        )));
                     }
                     let end = f0 + rate * duration;
                     if end <= 0.0 {
-                        return Err(CliError::Usage(format!("the chirp would reach {end} Hz <= 0 before its end")));
+                        return Err(CliError::Usage(format!(
+                            "the chirp would reach {end} Hz <= 0 before its end"
+                        )));
                     }
                     let c = LinearChirp::from_rate(common.amplitude, TAU * f0, TAU * rate)?;
                     write(&c, &common, duration)
                 }
                 ChirpKind::Log => {
                     let (Some(f1), Some(d), None) = (f1, duration, rate) else {
-                        return Err(CliError::Usage("a logarithmic chirp needs --f1 and --duration (and no --rate)".into()));
+                        return Err(CliError::Usage(
+                            "a logarithmic chirp needs --f1 and --duration (and no --rate)".into(),
+                        ));
                     };
-                    let c = LogChirp::new(common.amplitude, TAU * f0, TAU * positive("--f1", f1)?, positive("--duration", d)?)?;
+                    let c = LogChirp::new(
+                        common.amplitude,
+                        TAU * f0,
+                        TAU * positive("--f1", f1)?,
+                        positive("--duration", d)?,
+                    )?;
                     write(&c, &common, d)
                 }
             }
         }
-        Kind::SteppedSine { common, f_min, f_max, steps, sweep, dwell_cycles, dwell } => {
+        Kind::SteppedSine {
+            common,
+            f_min,
+            f_max,
+            steps,
+            sweep,
+            dwell_cycles,
+            dwell,
+        } => {
             positive("--fs", common.fs)?;
             positive("--f-min", f_min)?;
             if !(f_max.is_finite() && f_max > f_min) {
-                return Err(CliError::Usage(format!("--f-max {f_max} must be finite and > --f-min {f_min}")));
+                return Err(CliError::Usage(format!(
+                    "--f-max {f_max} must be finite and > --f-min {f_min}"
+                )));
             }
             if steps < 2 {
                 return Err(CliError::Usage(format!("--steps {steps}: need at least 2")));
@@ -191,10 +235,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
             let dw = match (dwell_cycles, dwell) {
                 (Some(c), None) => Dwell::Cycles(c),
                 (None, Some(s)) => Dwell::Seconds(positive("--dwell", s)?),
-                _ => return Err(CliError::Usage("give the dwell per step: --dwell-cycles N or --dwell SECONDS".into())),
+                _ => {
+                    return Err(CliError::Usage(
+                        "give the dwell per step: --dwell-cycles N or --dwell SECONDS".into(),
+                    ))
+                }
             };
-            let mut omegas: Vec<f64> =
-                (0..steps).map(|i| TAU * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64)).collect();
+            let mut omegas: Vec<f64> = (0..steps)
+                .map(|i| TAU * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64))
+                .collect();
             if sweep == Direction::Down {
                 omegas.reverse();
             }

@@ -128,7 +128,11 @@ impl Progress {
                 .progress_chars("=> "),
         );
         bar.set_message(what.to_string());
-        Self { bar, start: Instant::now(), shown: AtomicBool::new(false) }
+        Self {
+            bar,
+            start: Instant::now(),
+            shown: AtomicBool::new(false),
+        }
     }
 
     #[inline]
@@ -155,30 +159,73 @@ impl Progress {
     }
 }
 
+/// A spinner shown on stderr only if `f` takes more than a second.
+pub(crate) fn with_spinner<T>(what: &str, f: impl FnOnce() -> T) -> T {
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
+    bar.set_message(what.to_string());
+    let done = std::sync::Arc::new(AtomicBool::new(false));
+    let (b2, d2) = (bar.clone(), done.clone());
+    let timer = std::thread::spawn(move || {
+        let t = Instant::now();
+        while t.elapsed() < Duration::from_secs(1) {
+            if d2.load(Ordering::Relaxed) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        if !d2.load(Ordering::Relaxed) {
+            b2.set_draw_target(ProgressDrawTarget::stderr());
+            b2.enable_steady_tick(Duration::from_millis(120));
+        }
+    });
+    let out = f();
+    done.store(true, Ordering::Relaxed);
+    let _ = timer.join();
+    bar.finish_and_clear();
+    out
+}
+
 pub fn run(a: Args) -> Result<(), CliError> {
     let t_start = Instant::now();
     if a.decimate == 0 {
-        return Err(CliError::Usage("--decimate 0 is not allowed: give N >= 1 (write every N-th sample)".into()));
+        return Err(CliError::Usage(
+            "--decimate 0 is not allowed: give N >= 1 (write every N-th sample)".into(),
+        ));
     }
     let model = load_model(&a.model)?;
     let nm = model.normalised()?;
     nlsdof::simulation::check_model(&nm)?;
-    let signal = read_signal(&a.input, a.fs, a.var.as_deref())?;
-    let input = signal.as_input()?.with_gain(if a.base { -1.0 } else { 1.0 })?;
+    let signal = with_spinner("reading input", || {
+        read_signal(&a.input, a.fs, a.var.as_deref())
+    })?;
+    let input = signal
+        .as_input()?
+        .with_gain(if a.base { -1.0 } else { 1.0 })?;
     let uniform = matches!(signal.grid, SignalGrid::Uniform { .. });
     let method = match a.method {
         MethodArg::Rk4 => {
             let sps = a.samples_per_step.unwrap_or(if uniform { 2 } else { 1 });
-            Method::Rk4 { samples_per_step: sps }
+            Method::Rk4 {
+                samples_per_step: sps,
+            }
         }
         MethodArg::Dopri => {
             if a.samples_per_step.is_some() {
-                return Err(CliError::Usage("--samples-per-step applies to --method rk4 only".into()));
+                return Err(CliError::Usage(
+                    "--samples-per-step applies to --method rk4 only".into(),
+                ));
             }
-            Method::DormandPrince { rtol: a.rtol, atol: a.atol }
+            Method::DormandPrince {
+                rtol: a.rtol,
+                atol: a.atol,
+            }
         }
     };
-    let opts = Options { method, initial: State { x: a.x0, v: a.v0 }, decimation: a.decimate };
+    let opts = Options {
+        method,
+        initial: State { x: a.x0, v: a.v0 },
+        decimation: a.decimate,
+    };
     let mut out = CsvWriter::create(&a.out, &["t", "accel", "x", "v"])?;
     let n = input.len() as u64;
     let progress = Progress::new(n, "simulating");
@@ -229,7 +276,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
         });
         println!("{v}");
     } else {
-        let sps = if summary.samples_per_step > 0 { format!(", {} sample(s)/step", summary.samples_per_step) } else { String::new() };
+        let sps = if summary.samples_per_step > 0 {
+            format!(", {} sample(s)/step", summary.samples_per_step)
+        } else {
+            String::new()
+        };
         println!(
             "simulated {} samples ({method_name}{sps}, {} steps, {} RHS evaluations{}) in {:.3} s; max |x| = {:.6e} m; wrote {} rows to {}",
             summary.samples,

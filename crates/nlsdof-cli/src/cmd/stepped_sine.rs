@@ -125,16 +125,27 @@ pub fn run(a: Args) -> Result<(), CliError> {
         )));
     }
     if a.steps < 2 {
-        return Err(CliError::Usage(format!("--steps {}: need at least 2 frequency steps", a.steps)));
+        return Err(CliError::Usage(format!(
+            "--steps {}: need at least 2 frequency steps",
+            a.steps
+        )));
     }
     if a.history_decimate == 0 {
-        return Err(CliError::Usage("--history-decimate 0 is not allowed: give N >= 1".into()));
+        return Err(CliError::Usage(
+            "--history-decimate 0 is not allowed: give N >= 1".into(),
+        ));
     }
     let model = load_model(&a.model)?;
     let nm = model.normalised()?;
     let n = a.steps;
     let omegas: Vec<f64> = (0..n)
-        .map(|i| TAU * if i == n - 1 { a.f_max } else { a.f_min + (a.f_max - a.f_min) * i as f64 / (n - 1) as f64 })
+        .map(|i| {
+            TAU * if i == n - 1 {
+                a.f_max
+            } else {
+                a.f_min + (a.f_max - a.f_min) * i as f64 / (n - 1) as f64
+            }
+        })
         .collect();
     let opts = RigOptions {
         samples_per_cycle: a.samples_per_cycle,
@@ -150,16 +161,35 @@ pub fn run(a: Args) -> Result<(), CliError> {
         SweepArg::Both => vec![SweepDirection::Up, SweepDirection::Down],
     };
     // create the outputs first: a bad path fails before the simulation
-    let mut out = CsvWriter::create(&a.out, &["level", "gamma", "f_hz", "amplitude", "phase_deg", "sweep"])?;
+    let mut out = CsvWriter::create(
+        &a.out,
+        &["level", "gamma", "f_hz", "amplitude", "phase_deg", "sweep"],
+    )?;
     let mut details = match &a.details {
         Some(p) => Some(CsvWriter::create(
             p,
-            &["level", "gamma", "f_hz", "amplitude", "phase_deg", "sweep", "peak_to_peak", "harmonic2", "harmonic3", "cycles", "settled", "residual"],
+            &[
+                "level",
+                "gamma",
+                "f_hz",
+                "amplitude",
+                "phase_deg",
+                "sweep",
+                "peak_to_peak",
+                "harmonic2",
+                "harmonic3",
+                "cycles",
+                "settled",
+                "residual",
+            ],
         )?),
         None => None,
     };
     let mut history = match &a.history {
-        Some(p) => Some(CsvWriter::create(p, &["level", "gamma", "sweep", "t", "accel", "x", "v"])?),
+        Some(p) => Some(CsvWriter::create(
+            p,
+            &["level", "gamma", "sweep", "t", "accel", "x", "v"],
+        )?),
         None => None,
     };
     let progress = Progress::new((gammas.len() * n * dirs.len()) as u64, "stepped sine");
@@ -171,25 +201,34 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     let sim_s = t_sim.elapsed().as_secs_f64();
     progress.finish();
-    let name = |d: SweepDirection| if d == SweepDirection::Up { "up" } else { "down" };
+    let name = |d: SweepDirection| {
+        if d == SweepDirection::Up {
+            "up"
+        } else {
+            "down"
+        }
+    };
     let mut unsettled = 0usize;
     for (k, sw) in &sweeps {
-        let level = (k + 1) as f64;
+        let level = (k + 1).to_string();
         for p in &sw.points {
-            let row = [level, sw.gamma, p.omega / TAU, p.amplitude, p.phase.to_degrees()];
+            let row = [sw.gamma, p.omega / TAU, p.amplitude, p.phase.to_degrees()];
+            out.text(&level)?;
             for v in row {
                 out.num(v)?;
             }
             out.text(name(sw.direction))?;
             out.end_row()?;
             if let Some(d) = details.as_mut() {
+                d.text(&level)?;
                 for v in row {
                     d.num(v)?;
                 }
                 d.text(name(sw.direction))?;
-                for v in [p.peak_to_peak, p.harmonic2, p.harmonic3, p.cycles as f64] {
+                for v in [p.peak_to_peak, p.harmonic2, p.harmonic3] {
                     d.num(v)?;
                 }
+                d.text(&p.cycles.to_string())?;
                 d.text(if p.settled { "true" } else { "false" })?;
                 d.num(p.residual)?;
                 d.end_row()?;
@@ -198,7 +237,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         if let Some(h) = history.as_mut() {
             for s in &sw.history {
-                h.num(level)?;
+                h.text(&level)?;
                 h.num(sw.gamma)?;
                 h.text(name(sw.direction))?;
                 h.row(&[s.t, s.u, s.x, s.v])?;
@@ -218,7 +257,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
             a.max_cycles
         );
     }
-    let cycles: usize = sweeps.iter().flat_map(|(_, s)| s.points.iter().map(|p| p.cycles)).sum();
+    let cycles: usize = sweeps
+        .iter()
+        .flat_map(|(_, s)| s.points.iter().map(|p| p.cycles))
+        .sum();
     let simulated: f64 = sweeps.iter().map(|(_, s)| s.duration).sum();
     if a.json {
         let levels: Vec<_> = sweeps
@@ -241,7 +283,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
         );
     } else {
         for (k, s) in &sweeps {
-            if let Some(p) = s.points.iter().max_by(|p, q| p.amplitude.total_cmp(&q.amplitude)) {
+            if let Some(p) = s
+                .points
+                .iter()
+                .max_by(|p, q| p.amplitude.total_cmp(&q.amplitude))
+            {
                 println!(
                     "level {} (gamma {} m/s^2, sweep {}): peak {:.6e} m at {:.4} Hz, phase {:.2} deg",
                     k + 1,

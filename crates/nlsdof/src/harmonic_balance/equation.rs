@@ -35,7 +35,14 @@ const LN_SAFE: f64 = 690.0;
 
 impl ResponseEquation {
     pub fn new(s0: f64, s1: f64, rho: f64, d0: f64, d1: f64, eta: f64) -> Self {
-        Self { s0, s1, rho, d0, d1, eta }
+        Self {
+            s0,
+            s1,
+            rho,
+            d0,
+            d1,
+            eta,
+        }
     }
 
     /// `P(x) − 1` as a sum of real powers of `x`.
@@ -54,8 +61,16 @@ impl ResponseEquation {
     /// `(S, D, ρ s₁ x^ρ, η d₁ x^η)` at `t = ln x`.
     #[inline]
     fn parts(&self, t: f64) -> (f64, f64, f64, f64) {
-        let sr = if self.s1 == 0.0 { 0.0 } else { self.s1 * (self.rho * t).exp() };
-        let de = if self.d1 == 0.0 { 0.0 } else { self.d1 * (self.eta * t).exp() };
+        let sr = if self.s1 == 0.0 {
+            0.0
+        } else {
+            self.s1 * (self.rho * t).exp()
+        };
+        let de = if self.d1 == 0.0 {
+            0.0
+        } else {
+            self.d1 * (self.eta * t).exp()
+        };
         (self.s0 + sr, self.d0 + de, self.rho * sr, self.eta * de)
     }
 
@@ -77,7 +92,10 @@ impl ResponseEquation {
             (2.0 * t + q.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
         } else {
             let h = s.hypot(d);
-            (2.0 * t + 2.0 * h.ln(), 2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)))
+            (
+                2.0 * t + 2.0 * h.ln(),
+                2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)),
+            )
         }
     }
 
@@ -185,7 +203,10 @@ impl ResponseEquation {
         Ok(FoldIndicators {
             roots,
             critical: crit.into_iter().map(|t| (t, self.ln_p(t))).collect(),
-            inflection: infl.into_iter().map(|t| (t, self.level1(t, e_min))).collect(),
+            inflection: infl
+                .into_iter()
+                .map(|t| (t, self.level1(t, e_min)))
+                .collect(),
         })
     }
 
@@ -200,7 +221,9 @@ impl ResponseEquation {
         let (lo, hi) = self.search_range(&ps)?;
         let e_min = ps.exponents()[0];
         let second = |t: f64| self.level1(t, e_min);
-        Ok(ps.reduced_derivative().roots_in(lo, hi, Some(&second), None))
+        Ok(ps
+            .reduced_derivative()
+            .roots_in(lo, hi, Some(&second), None))
     }
 
     fn search_range(&self, ps: &PowerSum) -> Result<(f64, f64), SolveError> {
@@ -212,13 +235,19 @@ impl ResponseEquation {
         if bhi > shi {
             hi = shi;
             if self.ln_p(hi).signum() != sgn_hi {
-                return Err(SolveError::Overflow { amplitude: hi.exp(), omega: f64::NAN });
+                return Err(SolveError::Overflow {
+                    amplitude: hi.exp(),
+                    omega: f64::NAN,
+                });
             }
         }
         if blo < slo {
             lo = slo;
             if self.ln_p(lo).signum() != sgn_lo {
-                return Err(SolveError::Overflow { amplitude: lo.exp(), omega: f64::NAN });
+                return Err(SolveError::Overflow {
+                    amplitude: lo.exp(),
+                    omega: f64::NAN,
+                });
             }
         }
         Ok((lo, hi.max(lo)))
@@ -249,8 +278,16 @@ impl ResponseEquation {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, t_max);
         let mut t = t0.min(t_max);
         for _ in 0..60 {
-            let sr = if self.s1 == 0.0 { 0.0 } else { self.s1 * (self.rho * t).exp() };
-            let de = if self.d1 == 0.0 { 0.0 } else { self.d1 * (self.eta * t).exp() };
+            let sr = if self.s1 == 0.0 {
+                0.0
+            } else {
+                self.s1 * (self.rho * t).exp()
+            };
+            let de = if self.d1 == 0.0 {
+                0.0
+            } else {
+                self.d1 * (self.eta * t).exp()
+            };
             let (s, d) = (self.s0 + sr, self.d0 + de);
             let (st, dt) = (self.rho * sr, self.eta * de);
             let q = s * s + d * d;
@@ -258,7 +295,10 @@ impl ResponseEquation {
                 (2.0 * t + q.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
             } else {
                 let h = s.hypot(d);
-                (2.0 * t + 2.0 * h.ln(), 2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)))
+                (
+                    2.0 * t + 2.0 * h.ln(),
+                    2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)),
+                )
             };
             if f == 0.0 {
                 return Some(self.state_from_terms(t, sr, de));
@@ -275,7 +315,11 @@ impl ResponseEquation {
                     let u = e * step;
                     1.0 - u + 0.5 * u * u
                 };
-                return Some(self.state_from_terms(next, sr * shift(self.rho), de * shift(self.eta)));
+                return Some(self.state_from_terms(
+                    next,
+                    sr * shift(self.rho),
+                    de * shift(self.eta),
+                ));
             }
             if !(fp > 0.0) || !next.is_finite() || next <= lo || next >= hi {
                 next = if lo.is_finite() && hi.is_finite() {
@@ -288,7 +332,11 @@ impl ResponseEquation {
             }
             if (next - t).abs() <= 4.0 * f64::EPSILON * (1.0 + t.abs()) {
                 let (phase, stable) = self.phase_and_stability_t(next);
-                return Some(UniqueState { t: next, phase, stable });
+                return Some(UniqueState {
+                    t: next,
+                    phase,
+                    stable,
+                });
             }
             t = next;
         }
@@ -300,7 +348,11 @@ impl ResponseEquation {
         let (s, d) = (self.s0 + sr, self.d0 + de);
         let (st, dt) = (self.rho * sr, self.eta * de);
         let slope_sign = s * s + d * d + s * st + d * dt;
-        UniqueState { t, phase: d.atan2(s), stable: slope_sign > 0.0 && 2.0 * d + dt > 0.0 }
+        UniqueState {
+            t,
+            phase: d.atan2(s),
+            stable: slope_sign > 0.0 && 2.0 * d + dt > 0.0,
+        }
     }
 
     /// Upper bound on every root: `P ≥ x² d₀²` and `P ≥ x^{2+2η} d₁²`
@@ -438,7 +490,9 @@ mod tests {
     fn unique_state_matches_direct_evaluation() {
         let eq = ResponseEquation::new(-0.02, 3e-4, 4.0022, 0.0129, 2e-6, 3.03099);
         for t0 in [-3.0, 0.0, 2.0, 4.0] {
-            let st = eq.solve_unique_state(t0, eq.amplitude_bound().ln()).unwrap();
+            let st = eq
+                .solve_unique_state(t0, eq.amplitude_bound().ln())
+                .unwrap();
             let t = eq.solve_unique(t0, eq.amplitude_bound().ln()).unwrap();
             assert!((st.t - t).abs() < 1e-14);
             let (ph, stable) = eq.phase_and_stability_t(st.t);

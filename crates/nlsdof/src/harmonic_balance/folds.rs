@@ -34,8 +34,16 @@ struct Sample {
 }
 
 fn sample(r: &ForcedResponse, omega: f64) -> Result<Sample, SolveError> {
-    let ind = r.equation(omega).fold_indicators().map_err(|e| with_omega(e, omega))?;
-    Ok(Sample { omega, count: ind.roots.len(), crit: ind.critical, infl: ind.inflection })
+    let ind = r
+        .equation(omega)
+        .fold_indicators()
+        .map_err(|e| with_omega(e, omega))?;
+    Ok(Sample {
+        omega,
+        count: ind.roots.len(),
+        crit: ind.critical,
+        infl: ind.inflection,
+    })
 }
 
 /// `true` if one of the paired values may cross zero twice inside the cell:
@@ -79,7 +87,11 @@ fn locate(
         // refine: 4 sub-cells
         let mut prev = sample(r, a.omega)?;
         for k in 1..=4 {
-            let w = if k == 4 { b.omega } else { a.omega * (b.omega / a.omega).powf(k as f64 / 4.0) };
+            let w = if k == 4 {
+                b.omega
+            } else {
+                a.omega * (b.omega / a.omega).powf(k as f64 / 4.0)
+            };
             let s = sample(r, w)?;
             locate(r, &prev, &s, depth + 1, out)?;
             prev = s;
@@ -94,7 +106,11 @@ fn locate(
         if mid <= lo || mid >= hi {
             break;
         }
-        let n_mid = r.equation(mid).roots_t().map_err(|e| with_omega(e, mid))?.len();
+        let n_mid = r
+            .equation(mid)
+            .roots_t()
+            .map_err(|e| with_omega(e, mid))?
+            .len();
         if n_mid == n_lo {
             lo = mid;
             n_lo = n_mid;
@@ -121,7 +137,11 @@ fn locate(
         .into_iter()
         .min_by(|x, y| eq.ln_p(*x).abs().total_cmp(&eq.ln_p(*y).abs()));
     if let Some(t) = t {
-        out.push(Fold { omega, amplitude: t.exp() * r.scale, pair_above });
+        out.push(Fold {
+            omega,
+            amplitude: t.exp() * r.scale,
+            pair_above,
+        });
     }
     Ok(())
 }
@@ -131,8 +151,15 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
         return Err(ParameterError::InvalidRange { min: lo, max: hi }.into());
     }
     let mut out = Vec::new();
-    let grid: Vec<f64> =
-        (0..=GRID).map(|i| if i == GRID { hi } else { lo * (hi / lo).powf(i as f64 / GRID as f64) }).collect();
+    let grid: Vec<f64> = (0..=GRID)
+        .map(|i| {
+            if i == GRID {
+                hi
+            } else {
+                lo * (hi / lo).powf(i as f64 / GRID as f64)
+            }
+        })
+        .collect();
     // Cells where the analytic one-root certificate holds contain no fold:
     // skip them (no root isolation needed there).
     let fast = super::sweep::fast_path_possible(r);
@@ -152,7 +179,9 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
         prev = Some(b);
     }
     out.sort_by(|a, b| a.omega.total_cmp(&b.omega));
-    out.dedup_by(|a, b| (a.omega - b.omega).abs() <= 1e-13 * b.omega && a.pair_above == b.pair_above);
+    out.dedup_by(|a, b| {
+        (a.omega - b.omega).abs() <= 1e-13 * b.omega && a.pair_above == b.pair_above
+    });
     Ok(out)
 }
 
@@ -169,10 +198,18 @@ pub(crate) fn phase_quadrature(r: &ForcedResponse) -> Result<Option<PhaseQuadrat
         let k = if b == 0.0 { 0.0 } else { b * (rho * t).exp() };
         if exact {
             let v = 1.0 + k;
-            if v > 0.0 { v.sqrt() } else { f64::NAN }
+            if v > 0.0 {
+                v.sqrt()
+            } else {
+                f64::NAN
+            }
         } else {
             let v = 1.0 + 0.5 * k;
-            if v > 0.0 { v } else { f64::NAN }
+            if v > 0.0 {
+                v
+            } else {
+                f64::NAN
+            }
         }
     };
     let h = |t: f64| -> f64 {
@@ -182,7 +219,11 @@ pub(crate) fn phase_quadrature(r: &ForcedResponse) -> Result<Option<PhaseQuadrat
             return f64::NAN;
         }
         let xe = if c == 0.0 { 0.0 } else { c * (eta * t).exp() };
-        let d = if exact { 2.0 * zeta * nu + xe * nu.powf(1.0 + eta) } else { 2.0 * zeta + xe };
+        let d = if exact {
+            2.0 * zeta * nu + xe * nu.powf(1.0 + eta)
+        } else {
+            2.0 * zeta + xe
+        };
         t + d.ln()
     };
     let finish = |t: f64| {
@@ -201,7 +242,11 @@ pub(crate) fn phase_quadrature(r: &ForcedResponse) -> Result<Option<PhaseQuadrat
                 return Ok(None);
             }
             if (ft > 0.0) != (fa > 0.0) {
-                let (lo, flo, hi, fhi) = if a < t { (a, fa, t, ft) } else { (t, ft, a, fa) };
+                let (lo, flo, hi, fhi) = if a < t {
+                    (a, fa, t, ft)
+                } else {
+                    (t, ft, a, fa)
+                };
                 return Ok(finish(crate::power_sum::brent(&h, lo, hi, flo, fhi)));
             }
             a = t;

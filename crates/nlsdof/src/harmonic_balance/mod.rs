@@ -88,7 +88,10 @@ pub enum NoMotion {
     /// Coulomb friction (η = −1) holds the mass: the friction force
     /// `4 c_f / π` (its first-harmonic value) is at least the input force
     /// amplitude `m γ`. Both values are given per unit mass (m/s²).
-    Sticking { friction_accel: f64, input_accel: f64 },
+    Sticking {
+        friction_accel: f64,
+        input_accel: f64,
+    },
     /// No positive root for another reason (e.g. η < −1, where the damping
     /// force grows without bound as the amplitude goes to zero).
     NoRoot,
@@ -213,13 +216,26 @@ impl ForcedResponse {
         let c = if model.kappa == 0.0 {
             0.0
         } else {
-            crate::power_law::g_unchecked(model.eta) * model.kappa * (omega_n * scale).powf(model.eta)
+            crate::power_law::g_unchecked(model.eta)
+                * model.kappa
+                * (omega_n * scale).powf(model.eta)
                 / omega_n
         };
         if !(b.is_finite() && c.is_finite() && scale.is_finite() && scale > 0.0) {
-            return Err(SolveError::Overflow { amplitude: scale, omega: omega_n });
+            return Err(SolveError::Overflow {
+                amplitude: scale,
+                omega: omega_n,
+            });
         }
-        Ok(Self { model: *model, gamma, formulation, scale, omega_n, b, c })
+        Ok(Self {
+            model: *model,
+            gamma,
+            formulation,
+            scale,
+            omega_n,
+            b,
+            c,
+        })
     }
 
     /// Input level γ, m/s².
@@ -242,7 +258,11 @@ impl ForcedResponse {
                 self.b,
                 self.model.rho,
                 2.0 * zeta * nu,
-                if self.c == 0.0 { 0.0 } else { self.c * nu.powf(1.0 + self.model.eta) },
+                if self.c == 0.0 {
+                    0.0
+                } else {
+                    self.c * nu.powf(1.0 + self.model.eta)
+                },
                 self.model.eta,
             ),
             Formulation::Modulation => ResponseEquation::new(
@@ -278,14 +298,28 @@ impl ForcedResponse {
             .iter()
             .map(|&x| {
                 let (phase, stable) = eq.phase_and_stability(x);
-                SteadyState { amplitude: x * self.scale, phase, stable }
+                SteadyState {
+                    amplitude: x * self.scale,
+                    phase,
+                    stable,
+                }
             })
             .collect();
-        if let Some(bad) = roots.iter().find(|s| !(s.amplitude.is_finite() && s.amplitude > 0.0)) {
-            return Err(SolveError::Overflow { amplitude: bad.amplitude, omega });
+        if let Some(bad) = roots
+            .iter()
+            .find(|s| !(s.amplitude.is_finite() && s.amplitude > 0.0))
+        {
+            return Err(SolveError::Overflow {
+                amplitude: bad.amplitude,
+                omega,
+            });
         }
         let no_motion = roots.is_empty().then(|| self.no_motion_reason(&eq));
-        Ok(RootSet { omega, roots, no_motion })
+        Ok(RootSet {
+            omega,
+            roots,
+            no_motion,
+        })
     }
 
     /// All folds (saddle-node points) with `omega_min <= Ω <= omega_max`
@@ -396,5 +430,8 @@ pub fn sweep_levels(
         .iter()
         .map(|&g| ForcedResponse::new(model, g, formulation))
         .collect::<Result<Vec<_>, _>>()?;
-    responses.par_iter().map(|r| r.sweep(omegas, direction)).collect()
+    responses
+        .par_iter()
+        .map(|r| r.sweep(omegas, direction))
+        .collect()
 }

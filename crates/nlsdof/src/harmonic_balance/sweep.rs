@@ -36,17 +36,29 @@ use super::*;
 
 fn validate_omegas(omegas: &[f64]) -> Result<(), ParameterError> {
     if omegas.is_empty() {
-        return Err(ParameterError::Empty { name: "frequencies" });
+        return Err(ParameterError::Empty {
+            name: "frequencies",
+        });
     }
     for (i, &w) in omegas.iter().enumerate() {
         if !w.is_finite() {
-            return Err(ParameterError::NotFinite { name: "frequency", value: w });
+            return Err(ParameterError::NotFinite {
+                name: "frequency",
+                value: w,
+            });
         }
         if w <= 0.0 {
-            return Err(ParameterError::NotPositive { name: "frequency", value: w });
+            return Err(ParameterError::NotPositive {
+                name: "frequency",
+                value: w,
+            });
         }
         if i > 0 && w <= omegas[i - 1] {
-            return Err(ParameterError::NotIncreasing { index: i, value: w, previous: omegas[i - 1] });
+            return Err(ParameterError::NotIncreasing {
+                index: i,
+                value: w,
+                previous: omegas[i - 1],
+            });
         }
     }
     Ok(())
@@ -83,7 +95,11 @@ pub(crate) fn certify_cell(a: &ResponseEquation, b: &ResponseEquation) -> bool {
     }
     let rho = a.rho;
     let s0_max = a.s0.abs().max(b.s0.abs());
-    let s0sq_min = if (a.s0 > 0.0) != (b.s0 > 0.0) { 0.0 } else { (a.s0 * a.s0).min(b.s0 * b.s0) };
+    let s0sq_min = if (a.s0 > 0.0) != (b.s0 > 0.0) {
+        0.0
+    } else {
+        (a.s0 * a.s0).min(b.s0 * b.s0)
+    };
     let d0_min = a.d0.min(b.d0);
     if rho * rho * s0_max * s0_max < 4.0 * (1.0 + rho) * d0_min * d0_min {
         return true;
@@ -100,25 +116,47 @@ pub(crate) fn certify_cell(a: &ResponseEquation, b: &ResponseEquation) -> bool {
 
 fn point(r: &ForcedResponse, omega: f64, s: &SteadyState) -> SweepPoint {
     let _ = r;
-    SweepPoint { omega, amplitude: s.amplitude, phase: s.phase, stable: s.stable, sticking: false }
+    SweepPoint {
+        omega,
+        amplitude: s.amplitude,
+        phase: s.phase,
+        stable: s.stable,
+        sticking: false,
+    }
 }
 
 fn sticking_point(omega: f64) -> SweepPoint {
-    SweepPoint { omega, amplitude: 0.0, phase: 0.0, stable: true, sticking: true }
+    SweepPoint {
+        omega,
+        amplitude: 0.0,
+        phase: 0.0,
+        stable: true,
+        sticking: true,
+    }
 }
 
-pub(crate) fn sweep(r: &ForcedResponse, omegas: &[f64], dir: SweepDirection) -> Result<Sweep, SolveError> {
+pub(crate) fn sweep(
+    r: &ForcedResponse,
+    omegas: &[f64],
+    dir: SweepDirection,
+) -> Result<Sweep, SolveError> {
     validate_omegas(omegas)?;
     let order: Vec<usize> = match dir {
         SweepDirection::Up => (0..omegas.len()).collect(),
         SweepDirection::Down => (0..omegas.len()).rev().collect(),
     };
     let eqs: Vec<ResponseEquation> = omegas.iter().map(|&w| r.equation(w)).collect();
-    let certified = fast_path_possible(r) && eqs.windows(2).all(|w| certify_cell(&w[0], &w[1]))
+    let certified = fast_path_possible(r)
+        && eqs.windows(2).all(|w| certify_cell(&w[0], &w[1]))
         && (eqs.len() > 1 || certify_cell(&eqs[0], &eqs[0]));
     if certified {
         if let Some(points) = fast_sweep(r, omegas, &eqs, &order) {
-            return Ok(Sweep { direction: dir, points, jumps: Vec::new(), folds: Vec::new() });
+            return Ok(Sweep {
+                direction: dir,
+                points,
+                jumps: Vec::new(),
+                folds: Vec::new(),
+            });
         }
     }
     general_sweep(r, omegas, &order, dir)
@@ -137,7 +175,11 @@ fn fast_sweep(
         let eq = &eqs[i];
         let w = omegas[i];
         // any valid upper bound on the root works; 1/d₀ is the cheapest
-        let t_max = if eq.d0 > 0.0 { -eq.d0.ln() } else { eq.amplitude_bound().ln() };
+        let t_max = if eq.d0 > 0.0 {
+            -eq.d0.ln()
+        } else {
+            eq.amplitude_bound().ln()
+        };
         let guess = match k {
             0 => -0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln(),
             1 => hist[0].1,
@@ -153,9 +195,19 @@ fn fast_sweep(
                     + t0 * (w - w2) * (w - w1) / ((w0 - w2) * (w0 - w1))
             }
         };
-        let guess = if guess.is_finite() { guess.min(t_max) } else { 0.0f64.min(t_max) };
+        let guess = if guess.is_finite() {
+            guess.min(t_max)
+        } else {
+            0.0f64.min(t_max)
+        };
         let UniqueState { t, phase, stable } = eq.solve_unique_state(guess, t_max)?;
-        points.push(SweepPoint { omega: w, amplitude: t.exp() * r.scale, phase, stable, sticking: false });
+        points.push(SweepPoint {
+            omega: w,
+            amplitude: t.exp() * r.scale,
+            phase,
+            stable,
+            sticking: false,
+        });
         hist = [(w, t), hist[0], hist[1]];
     }
     Some(points)
@@ -197,8 +249,16 @@ fn slow_flow_from_rest(eq: &ResponseEquation) -> f64 {
         let a = re.hypot(im);
         let (s, d) = if a > 0.0 {
             let t = a.ln();
-            let sr = if eq.s1 == 0.0 { 0.0 } else { eq.s1 * (eq.rho * t).exp() };
-            let de = if eq.d1 == 0.0 { 0.0 } else { eq.d1 * (eq.eta * t).exp() };
+            let sr = if eq.s1 == 0.0 {
+                0.0
+            } else {
+                eq.s1 * (eq.rho * t).exp()
+            };
+            let de = if eq.d1 == 0.0 {
+                0.0
+            } else {
+                eq.d1 * (eq.eta * t).exp()
+            };
             (eq.s0 + sr, eq.d0 + de)
         } else {
             (eq.s0, eq.d0)
@@ -250,9 +310,15 @@ fn general_sweep(
         let w = omegas[i];
         if step > 0 {
             let (a, b) = (prev_omega.min(w), prev_omega.max(w));
-            let mut events: Vec<&Fold> = folds.iter().filter(|f| f.omega > a && f.omega <= b).collect();
+            let mut events: Vec<&Fold> = folds
+                .iter()
+                .filter(|f| f.omega > a && f.omega <= b)
+                .collect();
             if sgn < 0.0 {
-                events = folds.iter().filter(|f| f.omega >= a && f.omega < b).collect();
+                events = folds
+                    .iter()
+                    .filter(|f| f.omega >= a && f.omega < b)
+                    .collect();
                 events.reverse();
             }
             for f in events {
@@ -273,8 +339,10 @@ fn general_sweep(
                 let lf = f.amplitude.ln();
                 let k = (0..before.len() - 1)
                     .min_by(|&p, &q| {
-                        let cp = (before[p].amplitude.ln() - lf).abs() + (before[p + 1].amplitude.ln() - lf).abs();
-                        let cq = (before[q].amplitude.ln() - lf).abs() + (before[q + 1].amplitude.ln() - lf).abs();
+                        let cp = (before[p].amplitude.ln() - lf).abs()
+                            + (before[p + 1].amplitude.ln() - lf).abs();
+                        let cq = (before[q].amplitude.ln() - lf).abs()
+                            + (before[q + 1].amplitude.ln() - lf).abs();
                         cp.total_cmp(&cq)
                     })
                     .unwrap();
@@ -283,14 +351,21 @@ fn general_sweep(
                     let eq_after = r.equation(after_w);
                     let down = eq_after.ln_p((f.amplitude / r.scale).ln()) > 0.0;
                     let target = if down {
-                        (0..after.len()).rev().find(|&q| after[q].stable && after[q].amplitude < f.amplitude)
+                        (0..after.len())
+                            .rev()
+                            .find(|&q| after[q].stable && after[q].amplitude < f.amplitude)
                     } else {
-                        (0..after.len()).find(|&q| after[q].stable && after[q].amplitude > f.amplitude)
+                        (0..after.len())
+                            .find(|&q| after[q].stable && after[q].amplitude > f.amplitude)
                     }
                     .or_else(|| {
-                        (0..after.len()).filter(|&q| after[q].stable).min_by(|&p, &q| {
-                            (after[p].amplitude.ln() - lf).abs().total_cmp(&(after[q].amplitude.ln() - lf).abs())
-                        })
+                        (0..after.len())
+                            .filter(|&q| after[q].stable)
+                            .min_by(|&p, &q| {
+                                (after[p].amplitude.ln() - lf)
+                                    .abs()
+                                    .total_cmp(&(after[q].amplitude.ln() - lf).abs())
+                            })
                     });
                     match target {
                         Some(q) => {
@@ -318,11 +393,16 @@ fn general_sweep(
                 Some(j) if j < roots.len() => j,
                 Some(_) => {
                     // inconsistent count (a fold below resolution): nearest stable root
-                    let last = points.last().map(|p: &SweepPoint| p.amplitude).unwrap_or(0.0);
+                    let last = points
+                        .last()
+                        .map(|p: &SweepPoint| p.amplitude)
+                        .unwrap_or(0.0);
                     (0..roots.len())
                         .min_by(|&p, &q| {
-                            let dp = (roots[p].amplitude - last).abs() + if roots[p].stable { 0.0 } else { f64::MAX / 4.0 };
-                            let dq = (roots[q].amplitude - last).abs() + if roots[q].stable { 0.0 } else { f64::MAX / 4.0 };
+                            let dp = (roots[p].amplitude - last).abs()
+                                + if roots[p].stable { 0.0 } else { f64::MAX / 4.0 };
+                            let dq = (roots[q].amplitude - last).abs()
+                                + if roots[q].stable { 0.0 } else { f64::MAX / 4.0 };
                             dp.total_cmp(&dq)
                         })
                         .unwrap()
@@ -337,10 +417,18 @@ fn general_sweep(
                 let a = roots[j].amplitude.ln();
                 if let Some(q) = (0..roots.len())
                     .filter(|&q| roots[q].stable)
-                    .min_by(|&p, &q| (roots[p].amplitude.ln() - a).abs().total_cmp(&(roots[q].amplitude.ln() - a).abs()))
+                    .min_by(|&p, &q| {
+                        (roots[p].amplitude.ln() - a)
+                            .abs()
+                            .total_cmp(&(roots[q].amplitude.ln() - a).abs())
+                    })
                 {
                     if rank.is_some() {
-                        jumps.push(Jump { omega: w, amplitude_before: roots[j].amplitude, amplitude_after: roots[q].amplitude });
+                        jumps.push(Jump {
+                            omega: w,
+                            amplitude_before: roots[j].amplitude,
+                            amplitude_after: roots[q].amplitude,
+                        });
                     }
                     j = q;
                 }
@@ -350,5 +438,10 @@ fn general_sweep(
         }
         prev_omega = w;
     }
-    Ok(Sweep { direction: dir, points, jumps, folds })
+    Ok(Sweep {
+        direction: dir,
+        points,
+        jumps,
+        folds,
+    })
 }

@@ -28,7 +28,13 @@ pub(crate) const EVENT_LIMIT: usize = 64;
 
 /// Mode at velocity `v` with input `u` (used at the start and after every
 /// velocity reversal).
-pub(crate) fn initial_mode<S: Law, D: Law>(d: &Dyn<S, D>, kappa: f64, x: f64, v: f64, u: f64) -> Mode {
+pub(crate) fn initial_mode<S: Law, D: Law>(
+    d: &Dyn<S, D>,
+    kappa: f64,
+    x: f64,
+    v: f64,
+    u: f64,
+) -> Mode {
     if v > 0.0 {
         Mode::Slip(1.0)
     } else if v < 0.0 {
@@ -53,7 +59,14 @@ pub(crate) fn rest_mode<S: Law, D: Law>(d: &Dyn<S, D>, kappa: f64, x: f64, u: f6
 /// `g(a) > 0 ≥ g(b)`. Returns the end of the final bracket where `g ≤ 0`
 /// (the event has happened), after at most 200 evaluations or when the
 /// bracket is shorter than `tol`.
-pub(crate) fn illinois<G: FnMut(f64) -> f64>(mut g: G, mut a: f64, mut fa: f64, mut b: f64, mut fb: f64, tol: f64) -> f64 {
+pub(crate) fn illinois<G: FnMut(f64) -> f64>(
+    mut g: G,
+    mut a: f64,
+    mut fa: f64,
+    mut b: f64,
+    mut fb: f64,
+    tol: f64,
+) -> f64 {
     // invariant: fa > 0 >= fb
     let mut side = 0i8;
     for _ in 0..200 {
@@ -90,7 +103,13 @@ pub(crate) fn illinois<G: FnMut(f64) -> f64>(mut g: G, mut a: f64, mut fa: f64, 
 /// First time in `[lo, hi]` at which a stuck mass breaks away, i.e.
 /// `|F(τ)| > κ` with `F(τ) = u(τ) − restoring`; `None` if it stays stuck
 /// (checked at the mid point and the end of the interval).
-pub(crate) fn breakaway<U: Fn(f64) -> f64>(u: &U, restoring: f64, kappa: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
+pub(crate) fn breakaway<U: Fn(f64) -> f64>(
+    u: &U,
+    restoring: f64,
+    kappa: f64,
+    lo: f64,
+    hi: f64,
+) -> Option<(f64, f64)> {
     let excess = |tau: f64| (u(tau) - restoring).abs() - kappa;
     let mid = 0.5 * (lo + hi);
     let probe = if excess(mid) > 0.0 {
@@ -103,7 +122,18 @@ pub(crate) fn breakaway<U: Fn(f64) -> f64>(u: &U, restoring: f64, kappa: f64, lo
     // g > 0 while stuck, <= 0 once broken away
     let g = |tau: f64| -excess(tau);
     let g_lo = g(lo);
-    let tb = if g_lo > 0.0 { illinois(g, lo, g_lo, probe, g(probe), 1e-14 * (hi - lo).max(f64::MIN_POSITIVE)) } else { lo };
+    let tb = if g_lo > 0.0 {
+        illinois(
+            g,
+            lo,
+            g_lo,
+            probe,
+            g(probe),
+            1e-14 * (hi - lo).max(f64::MIN_POSITIVE),
+        )
+    } else {
+        lo
+    };
     let s = (u(tb) - restoring).signum();
     Some((tb, s))
 }
@@ -149,7 +179,17 @@ pub(crate) fn rk4_interval<S: Law, D: Law, U: Fn(f64) -> f64>(
                 let fr = kappa * s;
                 let (x0, v0) = (*x, *v);
                 let a1 = u(tau) - fr - d.internal(x0, v0);
-                let take = |len: f64| step(d, x0, v0, a1, len, u(tau + 0.5 * len) - fr, u(tau + len) - fr);
+                let take = |len: f64| {
+                    step(
+                        d,
+                        x0,
+                        v0,
+                        a1,
+                        len,
+                        u(tau + 0.5 * len) - fr,
+                        u(tau + len) - fr,
+                    )
+                };
                 let (xn, vn) = take(rem);
                 sum.steps += 1;
                 sum.rhs_evaluations += 4;
@@ -179,7 +219,11 @@ pub(crate) fn rk4_interval<S: Law, D: Law, U: Fn(f64) -> f64>(
                         p *= 0.5;
                     }
                 }
-                let sigma = if ga > 0.0 { illinois(&mut g, a, ga, rem, s * vn, 1e-14 * h) } else { rem.min(1e-14 * h) };
+                let sigma = if ga > 0.0 {
+                    illinois(&mut g, a, ga, rem, s * vn, 1e-14 * h)
+                } else {
+                    rem.min(1e-14 * h)
+                };
                 sum.rhs_evaluations += 3 * evals;
                 let (xe, _) = take(sigma);
                 *x = xe;
@@ -196,5 +240,8 @@ pub(crate) fn rk4_interval<S: Law, D: Law, U: Fn(f64) -> f64>(
             }
         }
     }
-    Err(SimulationError::EventOverflow { t: t_abs + tau, limit: EVENT_LIMIT })
+    Err(SimulationError::EventOverflow {
+        t: t_abs + tau,
+        limit: EVENT_LIMIT,
+    })
 }

@@ -27,7 +27,11 @@ pub enum SimulationError {
     #[error("{times} time values but {samples} samples: the two columns must have equal length")]
     LengthMismatch { times: usize, samples: usize },
     #[error("{name} = {value} is invalid: {reason}")]
-    InvalidOption { name: &'static str, value: f64, reason: &'static str },
+    InvalidOption {
+        name: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
     #[error("{samples_per_step} samples per RK4 step needs uniformly sampled input (use 1 for a time column with uneven steps)")]
     StrideNeedsUniformSampling { samples_per_step: usize },
     #[error("damping exponent eta = {eta} < -1: the force c_e v|v|^eta is unbounded at v = 0 (the mass would stick for ever); not simulated")]

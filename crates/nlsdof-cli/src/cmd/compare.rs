@@ -1,0 +1,128 @@
+//! `nlsdof compare`: fit several models to one data set and tabulate cost,
+//! RMS, AIC/BIC and parameters (paper Tables 5–7) and the phase-quadrature
+//! comparison (Table 8).
+
+use super::fit::{parse_model_kind, pq_text, progress_bar, result_json, DataArgs};
+use crate::error::CliError;
+use nlsdof::identification::{fit, FitOptions, FitSpec, Status, N_PARAMS, PARAM_NAMES};
+use serde_json::json;
+use std::fmt::Write as _;
+
+#[derive(clap::Args)]
+#[command(
+    about = "Fit several models to one data set: cost, RMS, AIC/BIC, parameters and phase-quadrature tables"
+)]
+pub struct Args {
+    #[command(flatten)]
+    pub data: DataArgs,
+    /// Models to compare, comma-separated.
+    #[arg(
+        long,
+        default_value = "linear,duffing,duffing-quadratic,duffing-generalised,generalised"
+    )]
+    pub models: String,
+    /// Estimate parameters the models hold (e.g. gain): name,..
+    #[arg(long, value_name = "NAME,..")]
+    pub free: Option<String>,
+    /// Global-search starts per model.
+    #[arg(long, default_value_t = 32)]
+    pub starts: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Mass m, kg (physical values in the JSON).
+    #[arg(long, value_name = "M")]
+    pub mass: Option<f64>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let data = args.data.load()?;
+    let kinds = args
+        .models
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(parse_model_kind)
+        .collect::<Result<Vec<_>, _>>()?;
+    if kinds.is_empty() {
+        return Err(CliError::Usage("--models is empty".into()));
+    }
+    if args.starts == 0 || args.starts > 100_000 {
+        return Err(CliError::Usage(format!(
+            "--starts {} is not allowed: use 1..=100000",
+            args.starts
+        )));
+    }
+    let mass = super::fit::resolve_mass(args.mass, None, None)?;
+    let opts = FitOptions {
+        starts: args.starts,
+        seed: args.seed,
+        ..FitOptions::default()
+    };
+    let mut results = Vec::new();
+    for kind in kinds {
+        let mut spec = FitSpec::new(kind, &data);
+        if let Some(list) = &args.free {
+            for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+                // a parameter a model does not have is simply not freed for it
+                match spec.free(name) {
+                    Ok(()) | Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
+                    Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
+                }
+            }
+        }
+        let pb = progress_bar(opts.starts, kind.name());
+        let r = fit(&data, &spec, &opts, &|| pb.inc(1));
+        pb.finish_and_clear();
+        results.push(r.map_err(|e| CliError::Usage(format!("{kind}: {e}")))?);
+    }
+    if args.json {
+        let v: Vec<_> = results
+            .iter()
+            .map(|r| result_json(&data, r, mass))
+            .collect::<Result<_, _>>()?;
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({"models": v})).expect("json")
+        );
+        return Ok(());
+    }
+    let mut s = String::new();
+    writeln!(
+        s,
+        "{:<22} {:>4} {:>14} {:>12} {:>12} {:>12}  parameters (mass-normalised)",
+        "model", "p", "cost", "RMS a/gamma", "AIC", "BIC"
+    )
+    .ok();
+    for r in &results {
+        let params: Vec<String> = (0..N_PARAMS)
+            .filter(|&j| r.status[j] != Status::Absent)
+            .map(|j| {
+                format!(
+                    "{}={:.5e}{}",
+                    PARAM_NAMES[j],
+                    r.theta[j],
+                    if r.status[j] == Status::Free { "" } else { "*" }
+                )
+            })
+            .collect();
+        writeln!(
+            s,
+            "{:<22} {:>4} {:>14.6e} {:>12.4e} {:>12.2} {:>12.2}  {}",
+            r.kind.name(),
+            r.n_free,
+            r.cost,
+            r.rms_normalised(),
+            r.aic(),
+            r.bic(),
+            params.join(" ")
+        )
+        .ok();
+    }
+    s.push_str("(* = held fixed)\n");
+    for r in &results {
+        s.push_str(&pq_text(&data, r)?);
+    }
+    print!("{s}");
+    Ok(())
+}

@@ -1,0 +1,710 @@
+//! `nlsdof fit`: identify a power-law model from stepped-sine amplitude
+//! curves at several input levels (paper §4, Eq 31). Also home of the
+//! helpers shared with `nlsdof compare` (data loading, options, reports).
+
+use crate::error::CliError;
+use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA, RHO};
+use nlsdof::identification::{
+    fit, integer_search, phase_quadrature_table, predicted_jumps, Dataset, FitOptions, FitResult,
+    FitSpec, ModelKind, Status, N_PARAMS, PARAM_NAMES,
+};
+use nlsdof::{Model, SweepDirection};
+use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
+use serde_json::{json, Value};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// `--runs` values for `--beam-dir`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RunsArg {
+    Up,
+    Down,
+    Both,
+}
+
+/// Data options shared by `fit` and `compare`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DataArgs {
+    /// Long-format CSV: level,gamma,f_hz,amplitude[,phase_deg][,sweep][,weight].
+    #[arg(value_name = "DATA", required_unless_present = "beam_dir")]
+    pub data: Option<PathBuf>,
+    /// Read a directory of frf_<A>g.txt files (tab-separated, decimal comma,
+    /// velocity amplitudes of up and down runs side by side) instead of DATA.
+    #[arg(long = "beam-dir", value_name = "DIR", conflicts_with = "data")]
+    pub beam_dir: Option<PathBuf>,
+    /// Runs of --beam-dir files to use.
+    #[arg(long, value_enum, default_value = "up")]
+    pub runs: RunsArg,
+    /// The amplitude column is a velocity amplitude (m/s), converted by Omega.
+    #[arg(long, conflicts_with = "acceleration")]
+    pub velocity: bool,
+    /// The amplitude column is an acceleration amplitude (m/s^2), converted by Omega^2.
+    #[arg(long)]
+    pub acceleration: bool,
+    /// The gamma column is in g (9.80665 m/s^2).
+    #[arg(long = "gamma-in-g")]
+    pub gamma_in_g: bool,
+    /// Both gamma and amplitude columns are peak-to-peak (halved on reading).
+    #[arg(long = "peak-to-peak")]
+    pub peak_to_peak: bool,
+}
+
+impl DataArgs {
+    pub fn load(&self) -> Result<Dataset, CliError> {
+        let err =
+            |e: nlsdof_io::stepped_sine_data::SteppedSineDataError| CliError::Usage(e.to_string());
+        if let Some(dir) = &self.beam_dir {
+            let runs = match self.runs {
+                RunsArg::Up => Runs::Up,
+                RunsArg::Down => Runs::Down,
+                RunsArg::Both => Runs::Both,
+            };
+            return read_beam_dir(dir, runs).map_err(err);
+        }
+        let path = self
+            .data
+            .as_ref()
+            .expect("clap requires DATA or --beam-dir");
+        let opts = ReadOptions {
+            amplitude: if self.velocity {
+                AmplitudeKind::Velocity
+            } else if self.acceleration {
+                AmplitudeKind::Acceleration
+            } else {
+                AmplitudeKind::Displacement
+            },
+            gamma_in_g: self.gamma_in_g,
+            peak_to_peak: self.peak_to_peak,
+        };
+        read_csv(path, &opts).map_err(err)
+    }
+}
+
+#[derive(clap::Args)]
+#[command(
+    about = "Fit a power-law model to stepped-sine amplitude curves at several input levels (Eq 31)",
+    after_long_help = fit_long_help()
+)]
+pub struct Args {
+    #[command(flatten)]
+    pub data: DataArgs,
+    /// Model: linear, duffing, quadratic, duffing-quadratic (classic),
+    /// duffing-generalised, generalised, generalised-damping, generalised-stiffness, coulomb.
+    #[arg(long, default_value = "generalised")]
+    pub model: String,
+    /// Hold parameters: name=value,.. (alpha, delta, beta, rho, kappa, eta, gain; m or mass sets the mass for conversion).
+    #[arg(long, value_name = "NAME=VALUE,..", allow_hyphen_values = true)]
+    pub fix: Option<String>,
+    /// Estimate parameters the model holds (e.g. gain, or an exponent): name,..
+    #[arg(long, value_name = "NAME,..")]
+    pub free: Option<String>,
+    /// Exponents restricted to integers: every integer pair in the bounds is fitted.
+    #[arg(long)]
+    pub integer: bool,
+    /// Number of global-search starts (1 = local fit from the data-derived start).
+    #[arg(long, default_value_t = 32)]
+    pub starts: usize,
+    /// Seed of the Latin-hypercube starts.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// TOML file of bounds: name = [min, max] (for beta/kappa: of beta_ref/kappa_ref, see --help).
+    #[arg(long, value_name = "FILE")]
+    pub bounds: Option<PathBuf>,
+    /// Mass m, kg, for physical units and --out.
+    #[arg(long, value_name = "M")]
+    pub mass: Option<f64>,
+    /// Take the mass from this model file.
+    #[arg(long = "model-file", value_name = "FILE")]
+    pub model_file: Option<PathBuf>,
+    /// Write the fitted model (TOML model format).
+    #[arg(long, value_name = "MODEL.toml")]
+    pub out: Option<PathBuf>,
+    /// Write an SVG of the data (dots) and the fitted model's sweeps (lines) per level.
+    #[arg(long, value_name = "FIG.svg")]
+    pub plot: Option<PathBuf>,
+    /// JSON output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Minimal SVG: measured amplitudes (dots) and the model's branch-following
+/// amplitudes at the same steps (lines), one colour per curve.
+pub fn fit_svg(data: &Dataset, res: &FitResult) -> String {
+    const W: f64 = 900.0;
+    const H: f64 = 560.0;
+    const L: f64 = 80.0;
+    const R: f64 = 170.0;
+    const T: f64 = 30.0;
+    const B: f64 = 50.0;
+    const COLOURS: [&str; 9] = [
+        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
+        "#17becf",
+    ];
+    let (mut f0, mut f1, mut a1) = (f64::INFINITY, 0.0f64, 0.0f64);
+    for c in &data.curves {
+        for (&w, &a) in c.omegas.iter().zip(&c.amplitudes) {
+            f0 = f0.min(hz(w));
+            f1 = f1.max(hz(w));
+            a1 = a1.max(a);
+        }
+    }
+    a1 = a1.max(res.model_amplitudes.iter().cloned().fold(0.0, f64::max)) * 1.05;
+    if !(a1 > 0.0) {
+        a1 = 1.0;
+    }
+    let x = |f: f64| L + (f - f0) / (f1 - f0).max(1e-300) * (W - L - R);
+    let y = |a: f64| H - B - a / a1 * (H - T - B);
+    let mut s = format!("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
+    let _ = writeln!(s, "<text x=\"{}\" y=\"18\" text-anchor=\"middle\">nlsdof fit: {} (dots: data, lines: model), cost {:.4e}</text>", W / 2.0, res.kind, res.cost);
+    let _ = writeln!(
+        s,
+        "<rect x=\"{L}\" y=\"{T}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>",
+        W - L - R,
+        H - T - B
+    );
+    for k in 0..=5 {
+        let f = f0 + (f1 - f0) * k as f64 / 5.0;
+        let a = a1 * k as f64 / 5.0;
+        let _ = writeln!(
+            s,
+            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{f:.1}</text>",
+            x(f),
+            H - B + 18.0
+        );
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{a:.2e}</text>",
+            L - 6.0,
+            y(a) + 4.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frequency [Hz]</text>",
+        L + (W - L - R) / 2.0,
+        H - 12.0
+    );
+    let _ = writeln!(s, "<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">amplitude [m]</text>", H / 2.0, H / 2.0);
+    let mut off = 0;
+    for (i, c) in data.curves.iter().enumerate() {
+        let col = COLOURS[i % COLOURS.len()];
+        let n = c.omegas.len();
+        let pts: Vec<String> = (0..n)
+            .map(|k| {
+                format!(
+                    "{:.2},{:.2}",
+                    x(hz(c.omegas[k])),
+                    y(res.model_amplitudes[off + k])
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "<polyline fill=\"none\" stroke=\"{col}\" stroke-width=\"1.5\" points=\"{}\"/>",
+            pts.join(" ")
+        );
+        let stride = (n / 300).max(1);
+        for k in (0..n).step_by(stride) {
+            let _ = writeln!(
+                s,
+                "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"1.8\" fill=\"{col}\"/>",
+                x(hz(c.omegas[k])),
+                y(c.amplitudes[k])
+            );
+        }
+        let dir = if c.direction == SweepDirection::Up {
+            "up"
+        } else {
+            "down"
+        };
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" fill=\"{col}\">{} ({dir})</text>",
+            W - R + 12.0,
+            T + 16.0 * (i as f64 + 1.0),
+            c.level
+        );
+        off += n;
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+fn fit_long_help() -> String {
+    "OBJECTIVE (Eq 31): sum over levels and steps of (a_model/gamma - a_meas/gamma)^2, the model amplitude \
+following the measured sweep direction (branch following through jumps).\n\n\
+PARAMETERS are mass-normalised (only ratios to m are identifiable with acceleration input): \
+alpha = k/m, delta = c/m, beta = k_r/m, kappa = c_e/m, exponents rho, eta, and the forcing gain \
+(the model sees gain*gamma; fixed at 1 unless --free gain).\n\n\
+DEFAULT BOUNDS (derived from the data): alpha in [(Omega_min/2)^2, (1.5 Omega_max)^2]; delta in \
+[1e-4, 1e2] x delta0 (delta0 from the lowest level's peak height); beta_ref = g(rho) beta A_ref^rho \
+in [1e-6, 2] x alpha0; kappa_ref = g(eta) kappa (Omega_ref A_ref)^eta in [1e-6, 1e2] x delta0; \
+rho in [0, 10]; eta in [-1, 8]; gain in [0.1, 10]. A_ref is the largest measured amplitude, \
+Omega_ref its frequency. --bounds FILE overrides: lines `alpha = [min, max]`.\n\n\
+Nonlinear stiffness is fitted as hardening (beta > 0)."
+        .to_string()
+}
+
+/// Parses `--fix`; returns the mass if given there.
+pub fn apply_fix_free(
+    spec: &mut FitSpec,
+    fix: Option<&str>,
+    free: Option<&str>,
+) -> Result<Option<f64>, CliError> {
+    let mut mass = None;
+    if let Some(list) = fix {
+        for item in list.split(',').filter(|s| !s.trim().is_empty()) {
+            let (name, value) = item
+                .split_once('=')
+                .ok_or_else(|| CliError::Usage(format!("--fix '{item}' is not name=value")))?;
+            let v: f64 = value.trim().parse().map_err(|_| {
+                CliError::Usage(format!("--fix {name}: '{}' is not a number", value.trim()))
+            })?;
+            let n = name.trim().to_ascii_lowercase();
+            if n == "m" || n == "mass" {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(CliError::Usage(format!(
+                        "--fix m={v}: the mass must be finite and > 0"
+                    )));
+                }
+                mass = Some(v);
+                continue;
+            }
+            spec.fix(&n, v)
+                .map_err(|e| CliError::Usage(format!("--fix: {e}")))?;
+        }
+    }
+    if let Some(list) = free {
+        for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+            spec.free(name)
+                .map_err(|e| CliError::Usage(format!("--free: {e}")))?;
+        }
+    }
+    Ok(mass)
+}
+
+/// Applies a bounds TOML file (`name = [min, max]`).
+pub fn apply_bounds(spec: &mut FitSpec, path: &Path) -> Result<(), CliError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::Usage(format!("cannot read {}: {e}", path.display())))?;
+    let table: toml::Table = toml::from_str(&text)
+        .map_err(|e| CliError::Usage(format!("{}: {}", path.display(), e.message())))?;
+    for (name, v) in table {
+        let arr = v.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
+            CliError::Usage(format!("{}: {name} must be [min, max]", path.display()))
+        })?;
+        let num = |x: &toml::Value| x.as_float().or_else(|| x.as_integer().map(|i| i as f64));
+        let (lo, hi) = match (num(&arr[0]), num(&arr[1])) {
+            (Some(a), Some(b)) => (a, b),
+            _ => {
+                return Err(CliError::Usage(format!(
+                    "{}: {name} bounds must be numbers",
+                    path.display()
+                )))
+            }
+        };
+        spec.set_bounds(&name, lo, hi)
+            .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
+    }
+    Ok(())
+}
+
+pub fn parse_model_kind(name: &str) -> Result<ModelKind, CliError> {
+    ModelKind::parse(name).ok_or_else(|| {
+        let all: Vec<&str> = ModelKind::ALL.iter().map(|k| k.name()).collect();
+        CliError::Usage(format!(
+            "unknown model '{name}' (expected one of {})",
+            all.join(", ")
+        ))
+    })
+}
+
+pub fn progress_bar(len: usize, what: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(len as u64),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} starts ({elapsed})")
+    {
+        pb.set_style(style);
+    }
+    pb.set_message(what.to_string());
+    pb
+}
+
+fn hz(w: f64) -> f64 {
+    w / (2.0 * PI)
+}
+
+fn status_name(s: Status) -> &'static str {
+    match s {
+        Status::Absent => "absent",
+        Status::Fixed(_) => "fixed",
+        Status::Free => "free",
+    }
+}
+
+/// Physical model for mass `m` (β, κ scaled; gain is not part of it).
+pub fn physical(res: &FitResult, m: f64) -> Result<Model, CliError> {
+    Ok(res.model().to_physical(m)?)
+}
+
+const PHYS: [(&str, &str); N_PARAMS] = [
+    ("k", "N/m"),
+    ("c", "N s/m"),
+    ("k_r", "N/m^(rho+1)"),
+    ("rho", "-"),
+    ("c_e", "N (s/m)^(eta+1)"),
+    ("eta", "-"),
+    ("gain", "-"),
+];
+
+/// JSON of one fit.
+pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<Value, CliError> {
+    let mut params = Vec::new();
+    for j in 0..N_PARAMS {
+        if res.status[j] == Status::Absent {
+            continue;
+        }
+        let unc = res.uncertainty.as_ref().and_then(|u| {
+            u.names
+                .iter()
+                .position(|n| *n == PARAM_NAMES[j])
+                .map(|k| (u, k))
+        });
+        let mass_scaled = matches!(j, ALPHA | DELTA | BETA | KAPPA);
+        let m = mass.unwrap_or(1.0);
+        let phys = |v: f64| if mass_scaled { v * m } else { v };
+        params.push(json!({
+            "name": PARAM_NAMES[j],
+            "status": status_name(res.status[j]),
+            "value": res.theta[j],
+            "std_error": unc.map(|(u, k)| u.std_errors[k]),
+            "ci95": unc.map(|(u, k)| [u.lower[k], u.upper[k]]),
+            "physical": { "name": PHYS[j].0, "unit": PHYS[j].1, "value": phys(res.theta[j]),
+                          "ci95": unc.map(|(u, k)| [phys(u.lower[k]), phys(u.upper[k])]) },
+        }));
+    }
+    let jumps = predicted_jumps(data, &res.theta)?;
+    let levels: Vec<Value> = res
+        .levels
+        .iter()
+        .zip(data.curves.iter().zip(&jumps))
+        .map(|(l, (c, pj))| {
+            json!({
+                "level": l.level, "gamma": l.gamma,
+                "sweep": if l.direction == SweepDirection::Up { "up" } else { "down" },
+                "points": l.points, "rms": l.rms, "rms_normalised": l.rms_normalised,
+                "measured_jump_f_hz": c.measured_jump(2.0).map(hz),
+                "model_jump_f_hz": pj.map(hz),
+            })
+        })
+        .collect();
+    let pq: Vec<Value> = phase_quadrature_table(data, &res.theta)?
+        .iter()
+        .map(|r| {
+            let (df, da) = r.differences_percent();
+            json!({
+                "level": r.level, "gamma": r.gamma, "measured_from": r.measured_from,
+                "measured_f_hz": hz(r.measured_omega), "measured_amplitude": r.measured_amplitude,
+                "model_f_hz": r.model_omega.map(hz), "model_amplitude": r.model_amplitude,
+                "diff_f_percent": df, "diff_amplitude_percent": da,
+            })
+        })
+        .collect();
+    let minima: Vec<Value> = res
+        .minima
+        .iter()
+        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta}))
+        .collect();
+    Ok(json!({
+        "model": res.kind.name(),
+        "parameters": params,
+        "parameter_order": PARAM_NAMES,
+        "theta": res.theta,
+        "mass": mass,
+        "mass_note": if mass.is_none() { Some("no mass given: physical values are per unit mass (m = 1 kg)") } else { None },
+        "cost": res.cost,
+        "rms_normalised": res.rms_normalised(),
+        "aic": res.aic(), "bic": res.bic(),
+        "points": res.n_points, "free_parameters": res.n_free,
+        "termination": res.termination.name(),
+        "iterations": res.iterations,
+        "correlation": res.uncertainty.as_ref().map(|u| json!({"names": u.names, "matrix": u.correlation})),
+        "minima": minima,
+        "levels": levels,
+        "phase_quadrature": pq,
+    }))
+}
+
+/// Human-readable report of one fit.
+pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
+    let mut s = String::new();
+    let m = mass.unwrap_or(1.0);
+    writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
+    writeln!(
+        s,
+        "termination: {} after {} iterations",
+        res.termination, res.iterations
+    )
+    .ok();
+    if mass.is_none() {
+        writeln!(
+            s,
+            "note: no mass given (--mass); physical values are per unit mass (m = 1 kg)"
+        )
+        .ok();
+    }
+    writeln!(
+        s,
+        "{:<6} {:>7} {:>15} {:>12} {:>33}   {}",
+        "param", "status", "value", "std error", "95 % interval", "physical"
+    )
+    .ok();
+    for j in 0..N_PARAMS {
+        if res.status[j] == Status::Absent {
+            continue;
+        }
+        let unc = res.uncertainty.as_ref().and_then(|u| {
+            u.names
+                .iter()
+                .position(|n| *n == PARAM_NAMES[j])
+                .map(|k| (u, k))
+        });
+        let (se, ci) = match unc {
+            Some((u, k)) => (
+                format!("{:.4e}", u.std_errors[k]),
+                format!("[{:.6e}, {:.6e}]", u.lower[k], u.upper[k]),
+            ),
+            None => ("-".into(), "-".into()),
+        };
+        let phys = if matches!(j, ALPHA | DELTA | BETA | KAPPA) {
+            res.theta[j] * m
+        } else {
+            res.theta[j]
+        };
+        writeln!(
+            s,
+            "{:<6} {:>7} {:>15.8e} {:>12} {:>33}   {} = {:.8e} {}",
+            PARAM_NAMES[j],
+            status_name(res.status[j]),
+            res.theta[j],
+            se,
+            ci,
+            PHYS[j].0,
+            phys,
+            PHYS[j].1
+        )
+        .ok();
+    }
+    let wn = res.theta[ALPHA].sqrt();
+    writeln!(
+        s,
+        "f_n = {:.6} Hz, zeta = {:.6e}",
+        hz(wn),
+        res.theta[DELTA] / (2.0 * wn)
+    )
+    .ok();
+    if res.uncertainty.is_none() {
+        writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
+    }
+    let jumps = predicted_jumps(data, &res.theta)?;
+    writeln!(
+        s,
+        "\nper level: {:<10} {:>10} {:>5} {:>12} {:>14} {:>14} {:>14}",
+        "level", "gamma", "sweep", "RMS [m]", "RMS a/gamma", "jump meas [Hz]", "jump model [Hz]"
+    )
+    .ok();
+    for (l, (c, pj)) in res.levels.iter().zip(data.curves.iter().zip(&jumps)) {
+        let f = |v: Option<f64>| {
+            v.map(|w| format!("{:.3}", hz(w)))
+                .unwrap_or_else(|| "-".into())
+        };
+        writeln!(
+            s,
+            "           {:<10} {:>10.5} {:>5} {:>12.4e} {:>14.4e} {:>14} {:>14}",
+            l.level,
+            l.gamma,
+            if l.direction == SweepDirection::Up {
+                "up"
+            } else {
+                "down"
+            },
+            l.rms,
+            l.rms_normalised,
+            f(c.measured_jump(2.0)),
+            f(*pj)
+        )
+        .ok();
+    }
+    s.push_str(&pq_text(data, res)?);
+    if res.minima.len() > 1 || res.minima.first().map_or(false, |m| m.count > 1) {
+        writeln!(s, "\ndistinct local minima ({}):", res.minima.len()).ok();
+        for (i, mm) in res.minima.iter().enumerate().take(20) {
+            let free: Vec<String> = (0..N_PARAMS)
+                .filter(|&j| res.status[j] == Status::Free)
+                .map(|j| format!("{}={:.5e}", PARAM_NAMES[j], mm.theta[j]))
+                .collect();
+            writeln!(
+                s,
+                "  #{:<3} cost {:.6e}  starts {:>4}  {}  {}",
+                i + 1,
+                mm.cost,
+                mm.count,
+                mm.termination,
+                free.join(" ")
+            )
+            .ok();
+        }
+    }
+    Ok(s)
+}
+
+/// Phase-quadrature table (Table 8 analogue) as text.
+pub fn pq_text(data: &Dataset, res: &FitResult) -> Result<String, CliError> {
+    let mut s = String::new();
+    writeln!(s, "\nphase quadrature (model) vs measured ({}): {:<10} {:>12} {:>12} {:>9} {:>12} {:>12} {:>9}", res.kind, "level", "f_meas [Hz]", "f_model", "diff %", "a_meas [m]", "a_model", "diff %").ok();
+    for r in phase_quadrature_table(data, &res.theta)? {
+        let (df, da) = r.differences_percent();
+        let o =
+            |v: Option<f64>, p: usize| v.map(|x| format!("{x:.p$}")).unwrap_or_else(|| "-".into());
+        writeln!(
+            s,
+            "  ({:<5})  {:<10} {:>12.4} {:>12} {:>9} {:>12.5e} {:>12} {:>9}",
+            r.measured_from,
+            r.level,
+            hz(r.measured_omega),
+            o(r.model_omega.map(hz), 4),
+            o(df, 2),
+            r.measured_amplitude,
+            r.model_amplitude
+                .map(|a| format!("{a:.5e}"))
+                .unwrap_or_else(|| "-".into()),
+            o(da, 2)
+        )
+        .ok();
+    }
+    Ok(s)
+}
+
+pub fn resolve_mass(
+    flag: Option<f64>,
+    from_fix: Option<f64>,
+    model_file: Option<&Path>,
+) -> Result<Option<f64>, CliError> {
+    if let Some(m) = flag {
+        if !(m.is_finite() && m > 0.0) {
+            return Err(CliError::Usage(format!(
+                "--mass {m} is not allowed: the mass must be finite and > 0 (kg)"
+            )));
+        }
+        return Ok(Some(m));
+    }
+    if from_fix.is_some() {
+        return Ok(from_fix);
+    }
+    if let Some(p) = model_file {
+        return Ok(Some(super::roots::load_model(p)?.mass));
+    }
+    Ok(None)
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let data = args.data.load()?;
+    let kind = parse_model_kind(&args.model)?;
+    let mut spec = FitSpec::new(kind, &data);
+    if let Some(b) = &args.bounds {
+        apply_bounds(&mut spec, b)?;
+    }
+    let fix_mass = apply_fix_free(&mut spec, args.fix.as_deref(), args.free.as_deref())?;
+    let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
+    if args.starts == 0 || args.starts > 100_000 {
+        return Err(CliError::Usage(format!(
+            "--starts {} is not allowed: use 1..=100000",
+            args.starts
+        )));
+    }
+    let opts = FitOptions {
+        starts: args.starts,
+        seed: args.seed,
+        ..FitOptions::default()
+    };
+    let mut integer_table = Vec::new();
+    let res = if args.integer {
+        if spec.status[RHO] != Status::Free
+            && spec.status[nlsdof::identification::models::ETA] != Status::Free
+        {
+            return Err(CliError::Usage(format!(
+                "--integer: the {kind} model has no free exponent"
+            )));
+        }
+        let cands = integer_search(&data, &spec, &opts);
+        let mut best: Option<FitResult> = None;
+        for c in cands {
+            match &c.fit {
+                Ok(r) => {
+                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "cost": r.cost, "termination": r.termination.name()}));
+                    if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                        best = Some(r.clone());
+                    }
+                }
+                Err(e) => {
+                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "error": e.to_string()}))
+                }
+            }
+        }
+        best.ok_or_else(|| {
+            CliError::Usage("--integer: no integer exponent pair could be fitted".into())
+        })?
+    } else {
+        let pb = progress_bar(opts.starts, kind.name());
+        let r = fit(&data, &spec, &opts, &|| pb.inc(1));
+        pb.finish_and_clear();
+        r.map_err(|e| CliError::Usage(e.to_string()))?
+    };
+    // write --out first (atomic) so a failure leaves nothing behind
+    if let Some(out) = &args.out {
+        let m = mass.unwrap_or(1.0);
+        let model = physical(&res, m)?;
+        let mut text = format!(
+            "# fitted by `nlsdof fit`, model {}, cost {:.6e}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
+            res.kind, res.cost, res.theta[GAIN]
+        );
+        if mass.is_none() {
+            text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
+        }
+        text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
+        nlsdof_io::atomic::write_atomic(out, text.as_bytes())?;
+    }
+    if let Some(p) = &args.plot {
+        nlsdof_io::atomic::write_atomic(p, fit_svg(&data, &res).as_bytes())?;
+    }
+    if args.json {
+        let mut v = result_json(&data, &res, mass)?;
+        if args.integer {
+            v["integer_pairs"] = Value::Array(integer_table);
+        }
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else {
+        let mut s = result_text(&data, &res, mass)?;
+        if args.integer {
+            s.push_str("\ninteger exponent pairs (rho, eta): cost\n");
+            for r in &integer_table {
+                writeln!(
+                    s,
+                    "  ({}, {}): {}",
+                    r["rho"],
+                    r["eta"],
+                    r.get("cost")
+                        .map(|c| format!("{:.6e}", c.as_f64().unwrap_or(f64::NAN)))
+                        .unwrap_or_else(|| r["error"].to_string())
+                )
+                .ok();
+            }
+        }
+        print!("{s}");
+    }
+    Ok(())
+}

@@ -1,0 +1,238 @@
+//! `nlsdof frf-estimate`: FRF from measured input/output time histories
+//! (Welch H1/H2 with coherence, or the spectral ratio of one record),
+//! written as the FRF CSV that `nlsdof linear-id` reads.
+
+use crate::error::CliError;
+use nlsdof::signal_processing::{spectral_ratio, welch_frf, Symmetry, WelchOptions, Window};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// H1 = G_xy/G_xx (Welch; unbiased by output noise), with coherence.
+    H1,
+    /// H2 = G_yy/G_yx (Welch; unbiased by input noise), with coherence.
+    H2,
+    /// Y/X of the whole record (sine sweep or impact; no window, no averaging).
+    Ratio,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WindowArg {
+    Hann,
+    Hamming,
+    Blackman,
+    Rectangular,
+}
+
+#[derive(clap::Args)]
+#[command(about = "Estimate an FRF (H1, H2 or spectral ratio) from input/output time histories", after_long_help = LONG_HELP)]
+pub struct Args {
+    /// Time-history file holding the input channel (CSV with header, Polytec ASCII .txt, or MAT v5).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// File holding the output channel, if not the --input file (e.g. Polytec exports: one channel per file).
+    #[arg(long = "output-file", value_name = "FILE")]
+    pub output_file: Option<PathBuf>,
+    /// Input channel: column/variable name or 1-based index among the channels (default 1).
+    #[arg(long = "input-channel", value_name = "NAME|K", default_value = "1")]
+    pub input_channel: String,
+    /// Output channel: name or 1-based index (default 2, or 1 with --output-file).
+    #[arg(long = "output-channel", value_name = "NAME|K")]
+    pub output_channel: Option<String>,
+    /// Sampling frequency, Hz, for files without a time column.
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    pub fs: Option<f64>,
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = MethodArg::H1)]
+    pub method: MethodArg,
+    /// Welch segment (FFT) length, samples (default 4096, or the record length if shorter).
+    #[arg(long, value_name = "N")]
+    pub segment: Option<usize>,
+    /// Fractional overlap of Welch segments, in [0, 1).
+    #[arg(
+        long,
+        value_name = "FRAC",
+        default_value_t = 0.5,
+        allow_hyphen_values = true
+    )]
+    pub overlap: f64,
+    /// Welch window (periodic/DFT-even form unless --symmetric-window).
+    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
+    pub window: WindowArg,
+    /// Use the symmetric window definition (filter-design form; not recommended for spectra).
+    #[arg(long = "symmetric-window")]
+    pub symmetric_window: bool,
+    /// Write only frequencies >= F0 Hz.
+    #[arg(long = "f-min", value_name = "F0", allow_hyphen_values = true)]
+    pub f_min: Option<f64>,
+    /// Write only frequencies <= F1 Hz.
+    #[arg(long = "f-max", value_name = "F1", allow_hyphen_values = true)]
+    pub f_max: Option<f64>,
+    /// Output FRF CSV (f_hz,re,im,mag,phase_deg[,coherence]).
+    #[arg(long, value_name = "FRF.csv")]
+    pub out: PathBuf,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+const LONG_HELP: &str = "DESCRIPTION:
+  H1 and H2 use Welch averaging: segments of --segment samples overlapping by --overlap,
+  each with its mean removed and multiplied by the window, one-sided spectral densities
+  G_xx, G_yy, G_xy averaged over the segments; H1 = G_xy/G_xx, H2 = G_yy/G_yx and the
+  coherence gamma^2 = |G_xy|^2/(G_xx G_yy) (= H1/H2). Windows are PERIODIC (DFT-even,
+  denominator N), the correct form for spectral analysis; --symmetric-window selects the
+  filter-design form (denominator N-1) for comparison. The random error of |H1| is about
+  sqrt(1 - gamma^2)/(|gamma| sqrt(2 n_d)) with n_d averages.
+  --method ratio divides the spectra of the whole record, Y(f)/X(f), without window: the
+  right estimate for one sine sweep or one impact whose response decays within the record.
+
+INPUT FILES:
+  CSV with a header (a time column t/time, or --fs) and named channels; Polytec ASCII time
+  exports (.txt starting `Source File Name`, one channel per file: use --output-file);
+  MAT v5 (one variable per channel, named with --input-channel/--output-channel; fs from a
+  scalar `fs`, a `t` vector or --fs). Sampling must be uniform.
+
+EXAMPLES:
+  nlsdof frf-estimate --input test.csv --input-channel force --output-channel vel --out h1.csv
+  nlsdof frf-estimate --input mec-t1-force.txt --output-file mec-t1-velocity.txt \\
+      --method ratio --f-min 50 --f-max 400 --out impact.csv
+
+Errors are one line on stderr, exit code 2; no output file is left behind.";
+
+fn read_channel(path: &Path, key: &str, fs: Option<f64>) -> Result<(f64, Vec<f64>), CliError> {
+    let is_mat = path
+        .extension()
+        .map(|e| e.eq_ignore_ascii_case("mat"))
+        .unwrap_or(false);
+    if is_mat {
+        let var = if key.parse::<usize>().is_ok() {
+            None
+        } else {
+            Some(key)
+        };
+        let s = nlsdof_io::signal_file::read_signal(path, fs, var)?;
+        return match s.grid {
+            nlsdof_io::signal_file::SignalGrid::Uniform { fs, .. } => Ok((fs, s.values)),
+            nlsdof_io::signal_file::SignalGrid::Times(_) => Err(CliError::Usage(format!(
+                "{}: sampling of {key:?} is not uniform",
+                path.display()
+            ))),
+        };
+    }
+    let th = nlsdof_io::frf_file::read_time_history(path, fs)?;
+    let v = th.channel(key, path)?.to_vec();
+    Ok((th.fs, v))
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let (fs_in, x) = read_channel(&args.input, &args.input_channel, args.fs)?;
+    let out_path = args
+        .output_file
+        .clone()
+        .unwrap_or_else(|| args.input.clone());
+    let out_key = args.output_channel.clone().unwrap_or_else(|| {
+        if args.output_file.is_some() {
+            "1".into()
+        } else {
+            "2".into()
+        }
+    });
+    let (fs_out, y) = read_channel(&out_path, &out_key, args.fs)?;
+    if (fs_in - fs_out).abs() > 1e-9 * fs_in {
+        return Err(CliError::Usage(format!(
+            "sampling frequencies differ: input {fs_in} Hz, output {fs_out} Hz"
+        )));
+    }
+    if x.len() != y.len() {
+        return Err(CliError::Usage(format!(
+            "input has {} samples but output has {}: lengths must match",
+            x.len(),
+            y.len()
+        )));
+    }
+    let fs = fs_in;
+    let f_lo = args.f_min.unwrap_or(0.0);
+    let f_hi = args.f_max.unwrap_or(f64::INFINITY);
+    if f_lo.is_nan() || f_hi.is_nan() || f_lo >= f_hi {
+        return Err(CliError::Usage(format!(
+            "--f-min {f_lo} / --f-max {f_hi}: need f-min < f-max"
+        )));
+    }
+    let (f, h, coh, averages, segment) = match args.method {
+        MethodArg::Ratio => {
+            let r = spectral_ratio(fs, &x, &y)?;
+            (r.frequency_hz, r.h, None, 1, x.len())
+        }
+        MethodArg::H1 | MethodArg::H2 => {
+            let window = match args.window {
+                WindowArg::Hann => Window::Hann,
+                WindowArg::Hamming => Window::Hamming,
+                WindowArg::Blackman => Window::Blackman,
+                WindowArg::Rectangular => Window::Rectangular,
+            };
+            let segment = args.segment.unwrap_or(4096.min(x.len()));
+            let opts = WelchOptions {
+                segment,
+                overlap: args.overlap,
+                window,
+                symmetry: if args.symmetric_window {
+                    Symmetry::Symmetric
+                } else {
+                    Symmetry::Periodic
+                },
+                detrend_mean: true,
+            };
+            let e = welch_frf(fs, &x, &y, &opts)?;
+            let h = if args.method == MethodArg::H1 {
+                e.h1
+            } else {
+                e.h2
+            };
+            (e.frequency_hz, h, Some(e.coherence), e.averages, segment)
+        }
+    };
+    // Drop DC and bins without input power (reported as exactly 0).
+    let keep: Vec<usize> = (0..f.len())
+        .filter(|&i| f[i] > 0.0 && f[i] >= f_lo && f[i] <= f_hi && h[i].norm() > 0.0)
+        .collect();
+    if keep.len() < 2 {
+        return Err(CliError::Usage(format!(
+            "fewer than 2 frequency lines with input power in [{f_lo}, {f_hi}] Hz"
+        )));
+    }
+    let fk: Vec<f64> = keep.iter().map(|&i| f[i]).collect();
+    let hk: Vec<(f64, f64)> = keep.iter().map(|&i| (h[i].re, h[i].im)).collect();
+    let ck: Option<Vec<f64>> = coh.as_ref().map(|c| keep.iter().map(|&i| c[i]).collect());
+    nlsdof_io::frf_file::write_frf_csv(&args.out, &fk, &hk, ck.as_deref())?;
+    let mean_coh = ck.as_ref().map(|c| c.iter().sum::<f64>() / c.len() as f64);
+    let method = match args.method {
+        MethodArg::H1 => "h1",
+        MethodArg::H2 => "h2",
+        MethodArg::Ratio => "ratio",
+    };
+    if args.json {
+        println!(
+            "{}",
+            json!({"method": method, "fs": fs, "samples": x.len(), "segment": segment, "averages": averages,
+                   "resolution_hz": fs / segment as f64, "lines": fk.len(), "mean_coherence": mean_coh,
+                   "window": if args.method == MethodArg::Ratio { "none" } else { match args.window { WindowArg::Hann => "hann", WindowArg::Hamming => "hamming", WindowArg::Blackman => "blackman", WindowArg::Rectangular => "rectangular" } },
+                   "window_form": if args.symmetric_window { "symmetric" } else { "periodic" },
+                   "out": args.out.display().to_string()})
+        );
+    } else {
+        println!(
+            "{method}: fs = {fs} Hz, {} samples, segment {segment} ({} averages), resolution {:.6} Hz, {} lines {:.6} .. {:.6} Hz{}",
+            x.len(),
+            averages,
+            fs / segment as f64,
+            fk.len(),
+            fk[0],
+            fk[fk.len() - 1],
+            mean_coh.map(|c| format!(", mean coherence {c:.4}")).unwrap_or_default()
+        );
+        println!("FRF written to {}", args.out.display());
+    }
+    Ok(())
+}

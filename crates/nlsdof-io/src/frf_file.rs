@@ -1,0 +1,586 @@
+//! FRF tables and measured time histories for linear identification.
+//!
+//! ## FRF CSV (read by `nlsdof linear-id`, written by `nlsdof frf-estimate`)
+//!
+//! Comma-separated, `#` comments, one header line naming the columns
+//! (case-insensitive):
+//! * frequency: `f_hz` (also `f`, `freq`, `frequency`), Hz, strictly increasing;
+//! * complex value: `re`, `im` (also `real`, `imag`); or
+//! * `mag` (also `magnitude`, `abs`) with optional `phase_deg` (also `phase`,
+//!   degrees) — without a phase the table is amplitude-only;
+//! * optional `coherence`.
+//!
+//! Without a header, 3 columns are `f_hz,re,im` and 2 columns `f_hz,mag`.
+//! Written files have `f_hz,re,im,mag,phase_deg[,coherence]`.
+//!
+//! ## Time histories (read by `nlsdof frf-estimate`)
+//!
+//! * **Polytec ASCII export** (`.txt` whose first line starts
+//!   `Source File Name`): header lines, then rows `time<TAB>value`, decimal
+//!   point; one channel per file, named by its `Signal:` line (e.g. the
+//!   impact tests in `shared/data/clamped-beam-duffing-catarinaluz`).
+//! * **CSV** with a header: a time column `t`/`time` (or `--fs`) and any
+//!   number of named channels; separators comma, semicolon, tab or spaces.
+//! * **MAT v5**: one variable per channel (read with
+//!   [`crate::signal_file::read_signal`]).
+//!
+//! The sampling must be uniform (time steps equal within 1e-3 of a step).
+//!
+//! ## Polytec swept-sine FRF (`frf_<A>g.txt` of the beam data)
+//!
+//! [`read_polytec_sweep`]: tab-separated, decimal comma, two header lines,
+//! columns frequency (Hz), amplitude and phase (deg) of run 1 and run 2.
+
+use crate::atomic::AtomicFile;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Errors reading FRF tables and time histories; each names the file and,
+/// where there is one, the line and the offending value.
+#[derive(Debug, Error)]
+pub enum FrfFileError {
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: no data rows")]
+    Empty { path: PathBuf },
+    #[error("{path}: line {line}: {message}")]
+    Line {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    #[error("{path}: {message}")]
+    Content { path: PathBuf, message: String },
+}
+
+/// An FRF table read from CSV.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfTable {
+    pub f_hz: Vec<f64>,
+    /// Complex values `(re, im)`, or `None` for amplitude-only data.
+    pub values: Option<Vec<(f64, f64)>>,
+    /// `|H|` (always present).
+    pub magnitude: Vec<f64>,
+    pub coherence: Option<Vec<f64>>,
+}
+
+fn find(names: &[String], wanted: &[&str]) -> Option<usize> {
+    names.iter().position(|n| wanted.contains(&n.as_str()))
+}
+
+fn parse_num(path: &Path, line: usize, field: &str) -> Result<f64, FrfFileError> {
+    let v: f64 = field.trim().parse().map_err(|_| FrfFileError::Line {
+        path: path.into(),
+        line,
+        message: format!("{:?} is not a number", field.trim()),
+    })?;
+    if !v.is_finite() {
+        return Err(FrfFileError::Line {
+            path: path.into(),
+            line,
+            message: format!("value {v} is not finite"),
+        });
+    }
+    Ok(v)
+}
+
+/// Reads an FRF CSV table (see the module documentation).
+pub fn read_frf_csv(path: &Path) -> Result<FrfTable, FrfFileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| FrfFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    let mut header: Option<Vec<String>> = None;
+    let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(|s| s.trim()).collect();
+        if header.is_none() && rows.is_empty() && fields.iter().any(|f| f.parse::<f64>().is_err()) {
+            header = Some(fields.iter().map(|f| f.to_ascii_lowercase()).collect());
+            continue;
+        }
+        let vals = fields
+            .iter()
+            .map(|f| parse_num(path, i + 1, f))
+            .collect::<Result<Vec<_>, _>>()?;
+        rows.push((i + 1, vals));
+    }
+    if rows.is_empty() {
+        return Err(FrfFileError::Empty { path: path.into() });
+    }
+    let ncol = header.as_ref().map(|h| h.len()).unwrap_or(rows[0].1.len());
+    for (line, r) in &rows {
+        if r.len() != ncol {
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: *line,
+                message: format!("expected {ncol} columns, found {}", r.len()),
+            });
+        }
+    }
+    let names = header.unwrap_or_else(|| match ncol {
+        2 => vec!["f_hz".into(), "mag".into()],
+        3 => vec!["f_hz".into(), "re".into(), "im".into()],
+        _ => vec![],
+    });
+    let content = |message: String| FrfFileError::Content {
+        path: path.into(),
+        message,
+    };
+    let fcol =
+        find(&names, &["f_hz", "f", "freq", "frequency", "frequency_hz"]).ok_or_else(|| {
+            content(format!(
+                "no frequency column (f_hz) among [{}]",
+                names.join(", ")
+            ))
+        })?;
+    let re = find(&names, &["re", "real"]);
+    let im = find(&names, &["im", "imag"]);
+    let mag = find(&names, &["mag", "magnitude", "abs"]);
+    let ph = find(&names, &["phase_deg", "phase"]);
+    let coh = find(&names, &["coherence"]);
+    let col = |c: usize| rows.iter().map(|r| r.1[c]).collect::<Vec<f64>>();
+    let f_hz = col(fcol);
+    for i in 1..f_hz.len() {
+        if f_hz[i] <= f_hz[i - 1] {
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: rows[i].0,
+                message: format!("frequency {} Hz does not exceed the previous one ({} Hz): frequencies must be strictly increasing", f_hz[i], f_hz[i - 1]),
+            });
+        }
+    }
+    if f_hz[0] < 0.0 {
+        return Err(FrfFileError::Line {
+            path: path.into(),
+            line: rows[0].0,
+            message: format!("negative frequency {} Hz", f_hz[0]),
+        });
+    }
+    let (values, magnitude) = match (re, im, mag, ph) {
+        (Some(r), Some(i), _, _) => {
+            let v: Vec<(f64, f64)> = col(r).into_iter().zip(col(i)).collect();
+            let m = v.iter().map(|(a, b)| a.hypot(*b)).collect();
+            (Some(v), m)
+        }
+        (_, _, Some(m), Some(p)) => {
+            let m = col(m);
+            let v = m
+                .iter()
+                .zip(col(p))
+                .map(|(a, d)| (a * d.to_radians().cos(), a * d.to_radians().sin()))
+                .collect();
+            (Some(v), m)
+        }
+        (_, _, Some(m), None) => (None, col(m)),
+        _ => {
+            return Err(content(format!(
+                "need columns re,im or mag[,phase_deg]; found [{}]",
+                names.join(", ")
+            )))
+        }
+    };
+    Ok(FrfTable {
+        f_hz,
+        values,
+        magnitude,
+        coherence: coh.map(col),
+    })
+}
+
+/// Writes `f_hz,re,im,mag,phase_deg[,coherence]` atomically.
+pub fn write_frf_csv(
+    path: &Path,
+    f_hz: &[f64],
+    values: &[(f64, f64)],
+    coherence: Option<&[f64]>,
+) -> Result<(), FrfFileError> {
+    let werr = |source| FrfFileError::Write {
+        path: path.into(),
+        source,
+    };
+    let mut f = AtomicFile::create(path).map_err(|e| FrfFileError::Content {
+        path: path.into(),
+        message: e.to_string(),
+    })?;
+    let mut s = String::from(if coherence.is_some() {
+        "f_hz,re,im,mag,phase_deg,coherence\n"
+    } else {
+        "f_hz,re,im,mag,phase_deg\n"
+    });
+    for (i, (&fr, &(re, im))) in f_hz.iter().zip(values).enumerate() {
+        s += &format!(
+            "{fr:?},{re:?},{im:?},{:?},{:?}",
+            re.hypot(im),
+            im.atan2(re).to_degrees()
+        );
+        if let Some(c) = coherence {
+            s += &format!(",{:?}", c[i]);
+        }
+        s.push('\n');
+    }
+    f.write_all(s.as_bytes()).map_err(werr)?;
+    f.commit().map_err(|e| FrfFileError::Content {
+        path: path.into(),
+        message: e.to_string(),
+    })
+}
+
+/// Uniformly sampled channels read from one file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeHistory {
+    pub fs: f64,
+    pub channels: Vec<(String, Vec<f64>)>,
+}
+
+impl TimeHistory {
+    /// A channel by name (case-insensitive) or by 1-based index among the channels.
+    pub fn channel(&self, key: &str, path: &Path) -> Result<&[f64], FrfFileError> {
+        if let Some(c) = self.channels.iter().find(|c| c.0.eq_ignore_ascii_case(key)) {
+            return Ok(&c.1);
+        }
+        if let Ok(i) = key.parse::<usize>() {
+            if i >= 1 && i <= self.channels.len() {
+                return Ok(&self.channels[i - 1].1);
+            }
+        }
+        let names: Vec<&str> = self.channels.iter().map(|c| c.0.as_str()).collect();
+        Err(FrfFileError::Content {
+            path: path.into(),
+            message: format!("no channel {key:?} (channels: {})", names.join(", ")),
+        })
+    }
+}
+
+fn uniform_fs(path: &Path, t: &[f64], lines: &[usize]) -> Result<f64, FrfFileError> {
+    if t.len() < 2 {
+        return Err(FrfFileError::Content {
+            path: path.into(),
+            message: format!("{} sample(s): need at least 2", t.len()),
+        });
+    }
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    for i in 1..t.len() {
+        let step = t[i] - t[i - 1];
+        if step.is_nan() || step <= 0.0 || (step - dt).abs() > 1e-3 * dt.abs() {
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: lines[i],
+                message: format!(
+                    "time {} s after {} s: sampling must be uniform with step {dt} s",
+                    t[i],
+                    t[i - 1]
+                ),
+            });
+        }
+    }
+    Ok(1.0 / dt)
+}
+
+/// Reads a Polytec ASCII time export (one channel) or a multi-channel CSV
+/// (see the module documentation). `fs` is needed for a CSV without a time
+/// column and must not contradict one.
+pub fn read_time_history(path: &Path, fs: Option<f64>) -> Result<TimeHistory, FrfFileError> {
+    if let Some(f) = fs {
+        if !(f.is_finite() && f > 0.0) {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!("sampling frequency {f} Hz must be > 0"),
+            });
+        }
+    }
+    let text = std::fs::read_to_string(path).map_err(|source| FrfFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    if text.starts_with("Source File Name") {
+        return read_polytec_time(path, &text, fs);
+    }
+    let mut header: Option<Vec<String>> = None;
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    let mut lines = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = if line.contains(',') {
+            line.split(',').map(str::trim).collect()
+        } else if line.contains(';') {
+            line.split(';').map(str::trim).collect()
+        } else {
+            line.split_whitespace().collect()
+        };
+        if header.is_none() && cols.is_empty() && fields.iter().any(|f| f.parse::<f64>().is_err()) {
+            header = Some(fields.iter().map(|s| s.to_string()).collect());
+            continue;
+        }
+        if cols.is_empty() {
+            cols = vec![Vec::new(); fields.len()];
+        }
+        if fields.len() != cols.len() {
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: i + 1,
+                message: format!("expected {} columns, found {}", cols.len(), fields.len()),
+            });
+        }
+        for (c, f) in fields.iter().enumerate() {
+            cols[c].push(parse_num(path, i + 1, f)?);
+        }
+        lines.push(i + 1);
+    }
+    if cols.is_empty() {
+        return Err(FrfFileError::Empty { path: path.into() });
+    }
+    let names = header.unwrap_or_else(|| (1..=cols.len()).map(|i| format!("ch{i}")).collect());
+    if names.len() != cols.len() {
+        return Err(FrfFileError::Content {
+            path: path.into(),
+            message: format!(
+                "header has {} names but rows have {} columns",
+                names.len(),
+                cols.len()
+            ),
+        });
+    }
+    let tcol = names
+        .iter()
+        .position(|n| n.eq_ignore_ascii_case("t") || n.eq_ignore_ascii_case("time"));
+    let fs = match (tcol, fs) {
+        (Some(_), Some(f)) => {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!("the file has a time column; --fs {f} would contradict it"),
+            })
+        }
+        (Some(c), None) => uniform_fs(path, &cols[c], &lines)?,
+        (None, Some(f)) => f,
+        (None, None) => {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: "no time column (t/time): give the sampling frequency (--fs HZ)".into(),
+            })
+        }
+    };
+    let channels = names
+        .into_iter()
+        .zip(cols)
+        .enumerate()
+        .filter(|(i, _)| Some(*i) != tcol)
+        .map(|(_, c)| c)
+        .collect();
+    Ok(TimeHistory { fs, channels })
+}
+
+fn read_polytec_time(
+    path: &Path,
+    text: &str,
+    fs: Option<f64>,
+) -> Result<TimeHistory, FrfFileError> {
+    let mut name = String::from("signal");
+    let mut t = Vec::new();
+    let mut v = Vec::new();
+    let mut lines = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if let Some(rest) = line.strip_prefix("Signal:") {
+            // "Time - Ref1 Force - Samples" -> "Ref1 Force"
+            let parts: Vec<&str> = rest.split(" - ").map(str::trim).collect();
+            name = parts.get(1).unwrap_or(&parts[0]).to_string();
+            continue;
+        }
+        let fields: Vec<&str> = line.split('\t').map(str::trim).collect();
+        if fields.len() != 2 {
+            if t.is_empty() {
+                continue;
+            }
+            if line.is_empty() {
+                continue;
+            }
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: i + 1,
+                message: format!("expected 'time<TAB>value', found {line:?}"),
+            });
+        }
+        match (fields[0].parse::<f64>(), fields[1].parse::<f64>()) {
+            (Ok(a), Ok(b)) => {
+                if !(a.is_finite() && b.is_finite()) {
+                    return Err(FrfFileError::Line {
+                        path: path.into(),
+                        line: i + 1,
+                        message: format!("non-finite sample {a}, {b}"),
+                    });
+                }
+                t.push(a);
+                v.push(b);
+                lines.push(i + 1);
+            }
+            _ if t.is_empty() => continue,
+            _ => {
+                return Err(FrfFileError::Line {
+                    path: path.into(),
+                    line: i + 1,
+                    message: format!("{line:?} is not 'time<TAB>value'"),
+                })
+            }
+        }
+    }
+    if t.is_empty() {
+        return Err(FrfFileError::Empty { path: path.into() });
+    }
+    let f = uniform_fs(path, &t, &lines)?;
+    if let Some(g) = fs {
+        if (g - f).abs() > 1e-6 * f {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!(
+                    "the file has a time column (fs = {f} Hz); --fs {g} would contradict it"
+                ),
+            });
+        }
+    }
+    Ok(TimeHistory {
+        fs: f,
+        channels: vec![(name, v)],
+    })
+}
+
+/// One run of a Polytec swept-sine FRF export.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRun {
+    pub f_hz: Vec<f64>,
+    pub amplitude: Vec<f64>,
+    pub phase_deg: Vec<f64>,
+}
+
+/// Reads a Polytec swept-sine export with decimal commas (the beam
+/// `frf_<A>g.txt` files): returns run 1 and, if present, run 2.
+pub fn read_polytec_sweep(path: &Path) -> Result<Vec<SweepRun>, FrfFileError> {
+    let bytes = std::fs::read(path).map_err(|source| FrfFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    let text: String = bytes.iter().map(|&b| b as char).collect(); // latin-1
+    let mut runs: Vec<SweepRun> = Vec::new();
+    for (i, raw) in text.lines().enumerate().skip(2) {
+        let line = raw.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let vals = line
+            .split('\t')
+            .map(|f| parse_num(path, i + 1, &f.replace(',', ".")))
+            .collect::<Result<Vec<f64>, _>>()?;
+        if vals.len() < 3 || (vals.len() - 1) % 2 != 0 {
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: i + 1,
+                message: format!("expected 1 + 2k columns, found {}", vals.len()),
+            });
+        }
+        let k = (vals.len() - 1) / 2;
+        if runs.is_empty() {
+            runs = vec![
+                SweepRun {
+                    f_hz: vec![],
+                    amplitude: vec![],
+                    phase_deg: vec![]
+                };
+                k
+            ];
+        }
+        if k != runs.len() {
+            return Err(FrfFileError::Line {
+                path: path.into(),
+                line: i + 1,
+                message: format!("expected {} runs, found {k}", runs.len()),
+            });
+        }
+        for (j, r) in runs.iter_mut().enumerate() {
+            r.f_hz.push(vals[0]);
+            r.amplitude.push(vals[1 + 2 * j]);
+            r.phase_deg.push(vals[2 + 2 * j]);
+        }
+    }
+    if runs.is_empty() {
+        return Err(FrfFileError::Empty { path: path.into() });
+    }
+    Ok(runs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frf_csv_round_trip_and_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("h.csv");
+        write_frf_csv(
+            &p,
+            &[1.0, 2.0],
+            &[(1.0, -1.0), (0.5, 0.25)],
+            Some(&[0.9, 1.0]),
+        )
+        .unwrap();
+        let t = read_frf_csv(&p).unwrap();
+        assert_eq!(t.values.unwrap(), vec![(1.0, -1.0), (0.5, 0.25)]);
+        assert_eq!(t.coherence.unwrap(), vec![0.9, 1.0]);
+        std::fs::write(&p, "f_hz,mag,phase_deg\n1,2,90\n2,1,0\n").unwrap();
+        let t = read_frf_csv(&p).unwrap();
+        let v = t.values.unwrap();
+        assert!(v[0].0.abs() < 1e-15 && (v[0].1 - 2.0).abs() < 1e-15);
+        std::fs::write(&p, "f_hz,re,im\n1,2,3\n1,2,3\n").unwrap();
+        let e = read_frf_csv(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("line 3") && e.contains("strictly increasing"),
+            "{e}"
+        );
+        std::fs::write(&p, "f_hz,re,im\n1,2,nan\n").unwrap();
+        assert!(read_frf_csv(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("not finite"));
+        std::fs::write(&p, "f_hz,re,im\n1,2\n").unwrap();
+        assert!(read_frf_csv(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("expected 3 columns"));
+    }
+
+    #[test]
+    fn time_history_csv_and_polytec() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("th.csv");
+        std::fs::write(&p, "t,force,vel\n0,1,2\n0.1,3,4\n0.2,5,6\n").unwrap();
+        let th = read_time_history(&p, None).unwrap();
+        assert!((th.fs - 10.0).abs() < 1e-9);
+        assert_eq!(th.channel("vel", &p).unwrap(), &[2.0, 4.0, 6.0]);
+        assert_eq!(th.channel("1", &p).unwrap(), &[1.0, 3.0, 5.0]);
+        assert!(th.channel("acc", &p).is_err());
+        let q = dir.path().join("p.txt");
+        std::fs::write(&q, "Source File Name:\tt3\r\nSignal:\tTime - Ref1 Force - Samples\r\n\r\nTime\tTime Signal\r\n[ s ]\t[ N ]\r\n0\t1.5\r\n0.0001\t2.5\r\n0.0002\t3\r\n").unwrap();
+        let th = read_time_history(&q, None).unwrap();
+        assert_eq!(th.channels[0].0, "Ref1 Force");
+        assert!((th.fs - 1e4).abs() < 1e-6);
+        std::fs::write(&p, "t,x\n0,1\n0.1,2\n0.3,3\n").unwrap();
+        assert!(read_time_history(&p, None)
+            .unwrap_err()
+            .to_string()
+            .contains("uniform"));
+    }
+}

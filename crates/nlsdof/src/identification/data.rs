@@ -1,0 +1,287 @@
+//! Measured stepped-sine amplitude curves (the data of Eq 31), validated.
+
+use crate::harmonic_balance::SweepDirection;
+use thiserror::Error;
+
+/// One measured step, in SI units and rad/s (long format, one row per step).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    /// Level label (e.g. "0.04g" or "1").
+    pub level: String,
+    /// Input acceleration amplitude γ, m/s², zero-to-peak.
+    pub gamma: f64,
+    /// Excitation frequency Ω, rad/s.
+    pub omega: f64,
+    /// Output displacement amplitude a, m, zero-to-peak.
+    pub amplitude: f64,
+    /// Phase lag, rad (optional).
+    pub phase: Option<f64>,
+    /// Sweep direction of the run this step belongs to.
+    pub direction: SweepDirection,
+    /// Weight of the squared residual (default 1).
+    pub weight: f64,
+}
+
+/// One sweep at one level: frequencies strictly increasing, whatever the
+/// sweep direction (the direction tells the branch follower which way the
+/// shaker went).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    pub level: String,
+    pub gamma: f64,
+    pub direction: SweepDirection,
+    pub omegas: Vec<f64>,
+    pub amplitudes: Vec<f64>,
+    pub phases: Option<Vec<f64>>,
+    pub weights: Vec<f64>,
+}
+
+/// A validated data set: at least two levels, each curve at least three
+/// distinct frequencies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    pub curves: Vec<Curve>,
+}
+
+/// Why a data set cannot be fitted. Each variant names the offending value.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DataError {
+    #[error("no data rows")]
+    Empty,
+    #[error("only one input level ({level}, gamma = {gamma} m/s^2): the identification needs at least two levels to separate linear and nonlinear terms")]
+    SingleLevel { level: String, gamma: f64 },
+    #[error(
+        "level {level} ({direction} sweep) has {count} distinct frequencies; at least 3 are needed"
+    )]
+    TooFewFrequencies {
+        level: String,
+        direction: &'static str,
+        count: usize,
+    },
+    #[error("level {level}: {what} = {value} at {f_hz} Hz is not a finite number")]
+    NotFinite {
+        level: String,
+        what: &'static str,
+        value: f64,
+        f_hz: f64,
+    },
+    #[error("level {level}: {what} = {value} at {f_hz} Hz must be > 0")]
+    NotPositive {
+        level: String,
+        what: &'static str,
+        value: f64,
+        f_hz: f64,
+    },
+    #[error("level {level}: amplitude = {value} at {f_hz} Hz is negative")]
+    NegativeAmplitude {
+        level: String,
+        value: f64,
+        f_hz: f64,
+    },
+    #[error("level {level} ({direction} sweep): frequency {f_hz} Hz appears more than once")]
+    DuplicateFrequency {
+        level: String,
+        direction: &'static str,
+        f_hz: f64,
+    },
+    #[error("level {level}: gamma = {value} m/s^2 differs from the level's first value {first} m/s^2 (gamma must be constant within a level)")]
+    GammaNotConstant {
+        level: String,
+        first: f64,
+        value: f64,
+    },
+    #[error("level {level}: weight = {value} at {f_hz} Hz must be finite and >= 0")]
+    BadWeight {
+        level: String,
+        value: f64,
+        f_hz: f64,
+    },
+}
+
+fn dir_name(d: SweepDirection) -> &'static str {
+    match d {
+        SweepDirection::Up => "up",
+        SweepDirection::Down => "down",
+    }
+}
+
+const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+impl Dataset {
+    /// Groups long-format records into curves (by level and direction, in
+    /// order of first appearance) and validates them.
+    pub fn from_records(records: &[Record]) -> Result<Self, DataError> {
+        if records.is_empty() {
+            return Err(DataError::Empty);
+        }
+        let mut level_gamma: Vec<(String, f64)> = Vec::new();
+        let mut groups: Vec<(String, SweepDirection, Vec<&Record>)> = Vec::new();
+        for r in records {
+            let f_hz = r.omega / TWO_PI;
+            let lvl = || r.level.clone();
+            for (what, v) in [
+                ("gamma", r.gamma),
+                ("frequency", r.omega),
+                ("amplitude", r.amplitude),
+            ] {
+                if !v.is_finite() {
+                    return Err(DataError::NotFinite {
+                        level: lvl(),
+                        what,
+                        value: v,
+                        f_hz,
+                    });
+                }
+            }
+            if let Some(p) = r.phase {
+                if !p.is_finite() {
+                    return Err(DataError::NotFinite {
+                        level: lvl(),
+                        what: "phase",
+                        value: p,
+                        f_hz,
+                    });
+                }
+            }
+            if r.gamma <= 0.0 {
+                return Err(DataError::NotPositive {
+                    level: lvl(),
+                    what: "gamma",
+                    value: r.gamma,
+                    f_hz,
+                });
+            }
+            if r.omega <= 0.0 {
+                return Err(DataError::NotPositive {
+                    level: lvl(),
+                    what: "frequency",
+                    value: f_hz,
+                    f_hz,
+                });
+            }
+            if r.amplitude < 0.0 {
+                return Err(DataError::NegativeAmplitude {
+                    level: lvl(),
+                    value: r.amplitude,
+                    f_hz,
+                });
+            }
+            if !(r.weight.is_finite() && r.weight >= 0.0) {
+                return Err(DataError::BadWeight {
+                    level: lvl(),
+                    value: r.weight,
+                    f_hz,
+                });
+            }
+            match level_gamma.iter().find(|(l, _)| *l == r.level) {
+                Some(&(_, g)) => {
+                    if (g - r.gamma).abs() > 1e-9 * g {
+                        return Err(DataError::GammaNotConstant {
+                            level: lvl(),
+                            first: g,
+                            value: r.gamma,
+                        });
+                    }
+                }
+                None => level_gamma.push((r.level.clone(), r.gamma)),
+            }
+            match groups
+                .iter_mut()
+                .find(|(l, d, _)| *l == r.level && *d == r.direction)
+            {
+                Some(g) => g.2.push(r),
+                None => groups.push((r.level.clone(), r.direction, vec![r])),
+            }
+        }
+        if level_gamma.len() < 2 {
+            let (level, gamma) = level_gamma.swap_remove(0);
+            return Err(DataError::SingleLevel { level, gamma });
+        }
+        let mut curves = Vec::with_capacity(groups.len());
+        for (level, direction, mut rows) in groups {
+            rows.sort_by(|a, b| a.omega.total_cmp(&b.omega));
+            for w in rows.windows(2) {
+                if w[0].omega == w[1].omega {
+                    return Err(DataError::DuplicateFrequency {
+                        level,
+                        direction: dir_name(direction),
+                        f_hz: w[0].omega / TWO_PI,
+                    });
+                }
+            }
+            if rows.len() < 3 {
+                return Err(DataError::TooFewFrequencies {
+                    level,
+                    direction: dir_name(direction),
+                    count: rows.len(),
+                });
+            }
+            let phases = rows
+                .iter()
+                .all(|r| r.phase.is_some())
+                .then(|| rows.iter().map(|r| r.phase.unwrap()).collect());
+            curves.push(Curve {
+                gamma: rows[0].gamma,
+                direction,
+                omegas: rows.iter().map(|r| r.omega).collect(),
+                amplitudes: rows.iter().map(|r| r.amplitude).collect(),
+                phases,
+                weights: rows.iter().map(|r| r.weight).collect(),
+                level,
+            });
+        }
+        Ok(Self { curves })
+    }
+
+    /// Total number of measured steps.
+    pub fn len(&self) -> usize {
+        self.curves.iter().map(|c| c.omegas.len()).sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Distinct levels `(label, gamma)` in order of first appearance.
+    pub fn levels(&self) -> Vec<(String, f64)> {
+        let mut out: Vec<(String, f64)> = Vec::new();
+        for c in &self.curves {
+            if !out.iter().any(|(l, _)| *l == c.level) {
+                out.push((c.level.clone(), c.gamma));
+            }
+        }
+        out
+    }
+}
+
+impl Curve {
+    /// Index of the largest measured amplitude.
+    pub fn peak_index(&self) -> usize {
+        (0..self.amplitudes.len())
+            .max_by(|&a, &b| self.amplitudes[a].total_cmp(&self.amplitudes[b]))
+            .unwrap_or(0)
+    }
+
+    /// Measured jump frequency (rad/s): the step before the largest
+    /// amplitude ratio between consecutive steps in sweep order (the last
+    /// point on the branch that ends). `None` if no ratio exceeds `min_ratio`.
+    pub fn measured_jump(&self, min_ratio: f64) -> Option<f64> {
+        let n = self.omegas.len();
+        let mut best: Option<(f64, usize)> = None;
+        for i in 0..n - 1 {
+            let (from, to) = match self.direction {
+                SweepDirection::Up => (i, i + 1),
+                SweepDirection::Down => (i + 1, i),
+            };
+            let (a, b) = (self.amplitudes[from], self.amplitudes[to]);
+            if a <= 0.0 || b <= 0.0 {
+                continue;
+            }
+            let ratio = (a / b).max(b / a);
+            if ratio > min_ratio && best.map_or(true, |(r, _)| ratio > r) {
+                best = Some((ratio, from));
+            }
+        }
+        best.map(|(_, i)| self.omegas[i])
+    }
+}

@@ -1,0 +1,374 @@
+//! Bounded Levenberg–Marquardt for small dense least-squares problems.
+//!
+//! Minimises `‖r(u)‖²` subject to `lo ≤ u ≤ hi`. Each iteration solves the
+//! damped normal equations `(JᵀJ + λ diag(JᵀJ)) δ = −Jᵀr` on the variables
+//! not held by an active bound (a variable at a bound whose gradient points
+//! out of the box is frozen for the step), projects `u + δ` onto the box and
+//! accepts it if the cost decreases. λ follows Nielsen's update rule
+//! (gain ratio of the actual to the linear-model reduction).
+
+use std::fmt;
+
+/// A least-squares problem: residuals and their Jacobian (row-major, one row
+/// per residual). `None` means "not evaluable here" (the step is rejected).
+pub trait LeastSquares: Sync {
+    fn n_params(&self) -> usize;
+    fn residuals(&self, u: &[f64]) -> Option<Vec<f64>>;
+    fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)>;
+}
+
+/// Stopping rules.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LmOptions {
+    pub max_iterations: usize,
+    /// Stop after this many objective evaluations (a discontinuous
+    /// objective — a jump moving across a step — can make LM reject many steps).
+    pub max_evaluations: usize,
+    /// Stop when every accepted step satisfies `|δ_k| ≤ xtol (1 + |u_k|)`.
+    pub xtol: f64,
+    /// Stop when an accepted step reduces the cost by less than `ftol · cost`.
+    pub ftol: f64,
+    /// Stop when the cosine between the residual and every free Jacobian
+    /// column is below `gtol`.
+    pub gtol: f64,
+    /// Stop when the cost is at most this (an exact fit).
+    pub cost_floor: f64,
+}
+
+impl Default for LmOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 100,
+            max_evaluations: 300,
+            xtol: 1e-12,
+            ftol: 1e-14,
+            gtol: 1e-12,
+            cost_floor: 0.0,
+        }
+    }
+}
+
+/// Why the iteration stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Termination {
+    /// The cost reached `cost_floor` (exact fit).
+    ZeroResidual,
+    /// Relative step below `xtol`.
+    SmallStep,
+    /// Relative cost reduction below `ftol`.
+    SmallCostReduction,
+    /// Projected gradient (cosine) below `gtol`.
+    SmallGradient,
+    /// `max_iterations` or `max_evaluations` reached.
+    MaxIterations,
+    /// No decrease found even with a very large damping (λ > 1e20).
+    Stalled,
+}
+
+impl Termination {
+    pub fn name(self) -> &'static str {
+        match self {
+            Termination::ZeroResidual => "zero-residual",
+            Termination::SmallStep => "small-step",
+            Termination::SmallCostReduction => "small-cost-reduction",
+            Termination::SmallGradient => "small-gradient",
+            Termination::MaxIterations => "max-iterations",
+            Termination::Stalled => "stalled",
+        }
+    }
+
+    /// Whether this is a convergence criterion (not a give-up).
+    pub fn converged(self) -> bool {
+        !matches!(self, Termination::MaxIterations | Termination::Stalled)
+    }
+}
+
+impl fmt::Display for Termination {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Result of one local minimisation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LmResult {
+    pub u: Vec<f64>,
+    pub cost: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub termination: Termination,
+}
+
+/// The start point cannot be evaluated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("the objective cannot be evaluated at the start point {start:?}")]
+pub struct StartNotEvaluable {
+    pub start: Vec<f64>,
+}
+
+fn sum_sq(r: &[f64]) -> f64 {
+    r.iter().map(|x| x * x).sum()
+}
+
+/// Solves the symmetric positive definite system `a x = b` (n × n,
+/// row-major) by Cholesky; `None` if not positive definite.
+pub fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+    let mut l = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..=i {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= l[i * n + k] * l[j * n + k];
+            }
+            if i == j {
+                if !(s > 0.0) || !s.is_finite() {
+                    return None;
+                }
+                l[i * n + i] = s.sqrt();
+            } else {
+                l[i * n + j] = s / l[j * n + j];
+            }
+        }
+    }
+    let mut y = b.to_vec();
+    for i in 0..n {
+        for k in 0..i {
+            y[i] -= l[i * n + k] * y[k];
+        }
+        y[i] /= l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        for k in i + 1..n {
+            y[i] -= l[k * n + i] * y[k];
+        }
+        y[i] /= l[i * n + i];
+    }
+    Some(y)
+}
+
+/// `(JᵀJ, Jᵀr)` for row-major `J` (m × n).
+pub fn normal_equations(j: &[f64], r: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut a = vec![0.0; n * n];
+    let mut g = vec![0.0; n];
+    for (row, &ri) in j.chunks_exact(n).zip(r) {
+        for p in 0..n {
+            let jp = row[p];
+            if jp == 0.0 {
+                continue;
+            }
+            g[p] += jp * ri;
+            for q in 0..=p {
+                a[p * n + q] += jp * row[q];
+            }
+        }
+    }
+    for p in 0..n {
+        for q in 0..p {
+            a[q * n + p] = a[p * n + q];
+        }
+    }
+    (a, g)
+}
+
+/// Bounded Levenberg–Marquardt from `u0` (projected onto the box).
+pub fn minimise<P: LeastSquares + ?Sized>(
+    problem: &P,
+    u0: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    opts: &LmOptions,
+) -> Result<LmResult, StartNotEvaluable> {
+    let n = problem.n_params();
+    let clamp = |v: f64, k: usize| v.max(lo[k]).min(hi[k]);
+    let mut u: Vec<f64> = (0..n).map(|k| clamp(u0[k], k)).collect();
+    let (mut r, mut j) = problem
+        .residuals_and_jacobian(&u)
+        .ok_or_else(|| StartNotEvaluable { start: u.clone() })?;
+    let mut evaluations = 1;
+    let mut cost = sum_sq(&r);
+    let mut lambda = 1e-3;
+    let mut nu = 2.0;
+    let mut iterations = 0;
+    let done = |u: Vec<f64>, cost, iterations, evaluations, termination| {
+        Ok(LmResult {
+            u,
+            cost,
+            iterations,
+            evaluations,
+            termination,
+        })
+    };
+    loop {
+        if cost <= opts.cost_floor {
+            return done(u, cost, iterations, evaluations, Termination::ZeroResidual);
+        }
+        if iterations >= opts.max_iterations {
+            return done(u, cost, iterations, evaluations, Termination::MaxIterations);
+        }
+        iterations += 1;
+        let (a, g) = normal_equations(&j, &r, n);
+        let active: Vec<bool> = (0..n)
+            .map(|k| (u[k] <= lo[k] && g[k] > 0.0) || (u[k] >= hi[k] && g[k] < 0.0))
+            .collect();
+        let inactive: Vec<usize> = (0..n).filter(|&k| !active[k]).collect();
+        let gnorm = inactive
+            .iter()
+            .map(|&k| {
+                let d = (a[k * n + k] * cost).sqrt();
+                if d > 0.0 {
+                    g[k].abs() / d
+                } else {
+                    0.0
+                }
+            })
+            .fold(0.0, f64::max);
+        if inactive.is_empty() || gnorm <= opts.gtol {
+            return done(u, cost, iterations, evaluations, Termination::SmallGradient);
+        }
+        let m = inactive.len();
+        loop {
+            let mut ar = vec![0.0; m * m];
+            let mut br = vec![0.0; m];
+            let mut dmax = 0.0f64;
+            for &kp in &inactive {
+                dmax = dmax.max(a[kp * n + kp]);
+            }
+            for (p, &kp) in inactive.iter().enumerate() {
+                for (q, &kq) in inactive.iter().enumerate() {
+                    ar[p * m + q] = a[kp * n + kq];
+                }
+                let diag = a[kp * n + kp].max(1e-12 * dmax).max(f64::MIN_POSITIVE);
+                ar[p * m + p] += lambda * diag;
+                br[p] = -g[kp];
+            }
+            let Some(step_r) = cholesky_solve(&ar, &br, m) else {
+                lambda *= nu;
+                nu *= 2.0;
+                if lambda > 1e20 {
+                    return done(u, cost, iterations, evaluations, Termination::Stalled);
+                }
+                continue;
+            };
+            let mut un = u.clone();
+            for (p, &k) in inactive.iter().enumerate() {
+                un[k] = clamp(u[k] + step_r[p], k);
+            }
+            let step: Vec<f64> = (0..n).map(|k| un[k] - u[k]).collect();
+            let small = (0..n).all(|k| step[k].abs() <= opts.xtol * (1.0 + u[k].abs()));
+            if small {
+                return done(u, cost, iterations, evaluations, Termination::SmallStep);
+            }
+            // linear-model prediction
+            let mut lin = 0.0;
+            for (row, &ri) in j.chunks_exact(n).zip(&r) {
+                let v = ri + row.iter().zip(&step).map(|(a, b)| a * b).sum::<f64>();
+                lin += v * v;
+            }
+            let pred = cost - lin;
+            if evaluations >= opts.max_evaluations {
+                return done(u, cost, iterations, evaluations, Termination::MaxIterations);
+            }
+            evaluations += 1;
+            let trial = problem.residuals(&un);
+            let cost_new = trial.as_ref().map(|t| sum_sq(t)).unwrap_or(f64::INFINITY);
+            if cost_new < cost {
+                let rho = if pred > 0.0 {
+                    (cost - cost_new) / pred
+                } else {
+                    0.5
+                };
+                lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                lambda = lambda.max(1e-15);
+                nu = 2.0;
+                let reduction = cost - cost_new;
+                let Some((rn, jn)) = problem.residuals_and_jacobian(&un) else {
+                    lambda *= 4.0;
+                    continue;
+                };
+                evaluations += 1;
+                u = un;
+                r = rn;
+                j = jn;
+                let old = cost;
+                cost = cost_new;
+                if cost <= opts.cost_floor {
+                    return done(u, cost, iterations, evaluations, Termination::ZeroResidual);
+                }
+                if reduction <= opts.ftol * old {
+                    return done(
+                        u,
+                        cost,
+                        iterations,
+                        evaluations,
+                        Termination::SmallCostReduction,
+                    );
+                }
+                break;
+            }
+            lambda *= nu;
+            nu *= 2.0;
+            if lambda > 1e20 {
+                return done(u, cost, iterations, evaluations, Termination::Stalled);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rosenbrock as least squares: r = (10(u1 − u0²), 1 − u0).
+    struct Rosen;
+    impl LeastSquares for Rosen {
+        fn n_params(&self) -> usize {
+            2
+        }
+        fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
+            Some(vec![10.0 * (u[1] - u[0] * u[0]), 1.0 - u[0]])
+        }
+        fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+            Some((self.residuals(u)?, vec![-20.0 * u[0], 10.0, -1.0, 0.0]))
+        }
+    }
+
+    #[test]
+    fn rosenbrock_unbounded_and_bounded() {
+        let inf = f64::INFINITY;
+        let r = minimise(
+            &Rosen,
+            &[-1.2, 1.0],
+            &[-inf, -inf],
+            &[inf, inf],
+            &LmOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            (r.u[0] - 1.0).abs() < 1e-10 && (r.u[1] - 1.0).abs() < 1e-10,
+            "{r:?}"
+        );
+        assert!(r.termination.converged());
+        // bound u0 <= 0.5: optimum on the bound, u1 = 0.25
+        let r = minimise(
+            &Rosen,
+            &[-1.2, 1.0],
+            &[-inf, -inf],
+            &[0.5, inf],
+            &LmOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            (r.u[0] - 0.5).abs() < 1e-12 && (r.u[1] - 0.25).abs() < 1e-8,
+            "{r:?}"
+        );
+    }
+
+    #[test]
+    fn cholesky_solves() {
+        let a = [4.0, 2.0, 2.0, 3.0];
+        let x = cholesky_solve(&a, &[2.0, 1.0], 2).unwrap();
+        assert!((4.0 * x[0] + 2.0 * x[1] - 2.0).abs() < 1e-14);
+        assert!((2.0 * x[0] + 3.0 * x[1] - 1.0).abs() < 1e-14);
+        assert!(cholesky_solve(&[1.0, 2.0, 2.0, 1.0], &[1.0, 1.0], 2).is_none());
+    }
+}

@@ -1,0 +1,391 @@
+//! Identification of the power-law models from stepped-sine amplitude
+//! curves at several input levels (paper §4, Eq 31).
+//!
+//! * [`data`] — validated measured curves ([`Dataset`]).
+//! * [`models`] — the model family ([`ModelKind`]) and parameter names.
+//! * [`objective`] — Eq 31 with branch-following model sweeps, the analytic
+//!   Jacobian by implicit differentiation, the optimisation variables.
+//! * [`levenberg_marquardt`] — bounded LM (the local solver).
+//! * [`global`] — seeded parallel multistart.
+//! * [`uncertainty`] — standard errors, 95 % intervals, correlations.
+//!
+//! Everything is in mass-normalised parameters θ = (α, δ, β, ρ, κ, η, gain):
+//! with acceleration input only ratios to m are identifiable. The model
+//! sees the input `gain · γ` (a point on a continuous structure).
+
+pub mod data;
+pub mod global;
+pub mod levenberg_marquardt;
+pub mod models;
+pub mod objective;
+pub mod uncertainty;
+
+pub use data::{Curve, DataError, Dataset, Record};
+pub use levenberg_marquardt::{LmOptions, Termination};
+pub use models::{ModelKind, N_PARAMS, PARAM_NAMES};
+pub use objective::{FitSpec, SpecError, Status};
+pub use uncertainty::Uncertainty;
+
+use crate::error::SolveError;
+use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
+use objective::{evaluate, normalised_model, Problem};
+
+/// Errors of a fit.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FitError {
+    #[error(transparent)]
+    Data(#[from] DataError),
+    #[error(transparent)]
+    Spec(#[from] SpecError),
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    #[error("no start point of the {model} fit could be evaluated (every model sweep failed)")]
+    NoStartEvaluable { model: ModelKind },
+}
+
+/// Options of [`fit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitOptions {
+    /// Number of starts (1 = local fit from the data-derived start only).
+    pub starts: usize,
+    pub seed: u64,
+    pub lm: LmOptions,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self {
+            starts: 1,
+            seed: 1,
+            lm: LmOptions::default(),
+        }
+    }
+}
+
+/// One distinct local minimum of the global search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Minimum {
+    pub theta: [f64; N_PARAMS],
+    pub cost: f64,
+    pub termination: Termination,
+    pub iterations: usize,
+    /// Number of starts that converged here.
+    pub count: usize,
+}
+
+/// Per-level residual summary.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelStats {
+    pub level: String,
+    pub gamma: f64,
+    pub direction: SweepDirection,
+    pub points: usize,
+    /// RMS of `a_model − a_meas`, m.
+    pub rms: f64,
+    /// RMS of `(a_model − a_meas)/γ`, s².
+    pub rms_normalised: f64,
+}
+
+/// Result of [`fit`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitResult {
+    pub kind: ModelKind,
+    pub status: [Status; N_PARAMS],
+    /// Best θ = (α, δ, β, ρ, κ, η, gain).
+    pub theta: [f64; N_PARAMS],
+    /// Eq 31 cost Σ w ((a_model − a_meas)/γ)².
+    pub cost: f64,
+    pub n_points: usize,
+    pub n_free: usize,
+    pub termination: Termination,
+    pub iterations: usize,
+    /// Distinct minima, best first.
+    pub minima: Vec<Minimum>,
+    /// `None` if `JᵀJ` is singular at the optimum.
+    pub uncertainty: Option<Uncertainty>,
+    pub levels: Vec<LevelStats>,
+    /// Model amplitudes at the data steps (curve by curve).
+    pub model_amplitudes: Vec<f64>,
+}
+
+impl FitResult {
+    /// Akaike information criterion `n ln(cost/n) + 2p`.
+    pub fn aic(&self) -> f64 {
+        let n = self.n_points as f64;
+        n * (self.cost / n).ln() + 2.0 * self.n_free as f64
+    }
+
+    /// Bayesian information criterion `n ln(cost/n) + p ln n`.
+    pub fn bic(&self) -> f64 {
+        let n = self.n_points as f64;
+        n * (self.cost / n).ln() + self.n_free as f64 * n.ln()
+    }
+
+    /// RMS of the normalised residuals over all steps.
+    pub fn rms_normalised(&self) -> f64 {
+        (self.cost / self.n_points as f64).sqrt()
+    }
+
+    /// Mass-normalised model of the best fit (γ must be scaled by `gain`).
+    pub fn model(&self) -> crate::model::NormalisedModel {
+        normalised_model(&self.theta)
+    }
+}
+
+/// Fits `spec` to `data` (Eq 31): local LM from the data-derived start,
+/// or a multistart global search when `opts.starts > 1`. `progress` is
+/// called once per finished start.
+pub fn fit(
+    data: &Dataset,
+    spec: &FitSpec,
+    opts: &FitOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<FitResult, FitError> {
+    let problem = Problem::new(data, spec)?;
+    let (lo, hi) = problem.u_bounds();
+    let u0 = problem.u_of(&spec.start);
+    let mut lm = opts.lm;
+    if lm.cost_floor == 0.0 {
+        // an exact fit: residuals at rounding level of the data
+        let scale: f64 = data
+            .curves
+            .iter()
+            .flat_map(|c| c.amplitudes.iter().map(move |a| (a / c.gamma).powi(2)))
+            .sum();
+        lm.cost_floor = 1e-28 * scale;
+    }
+    let found = global::multistart(
+        &problem,
+        &u0,
+        &lo,
+        &hi,
+        opts.starts.max(1),
+        opts.seed,
+        &lm,
+        progress,
+    );
+    let best = found
+        .first()
+        .ok_or(FitError::NoStartEvaluable { model: spec.kind })?;
+    let minima: Vec<Minimum> = found
+        .iter()
+        .map(|m| Minimum {
+            theta: problem.theta(&m.result.u),
+            cost: m.result.cost,
+            termination: m.result.termination,
+            iterations: m.result.iterations,
+            count: m.count,
+        })
+        .collect();
+    let theta = problem.theta(&best.result.u);
+    let e = evaluate(data, &theta, true)?;
+    let jac = e.jacobian.as_ref().expect("jacobian requested");
+    let unc = uncertainty::uncertainty(&theta, &problem.free, jac, &e.residuals);
+    let mut levels = Vec::new();
+    let mut off = 0;
+    for c in &data.curves {
+        let n = c.omegas.len();
+        let (mut s, mut sn) = (0.0, 0.0);
+        for i in 0..n {
+            let d = e.model[off + i] - c.amplitudes[i];
+            s += d * d;
+            sn += (d / c.gamma).powi(2);
+        }
+        levels.push(LevelStats {
+            level: c.level.clone(),
+            gamma: c.gamma,
+            direction: c.direction,
+            points: n,
+            rms: (s / n as f64).sqrt(),
+            rms_normalised: (sn / n as f64).sqrt(),
+        });
+        off += n;
+    }
+    Ok(FitResult {
+        kind: spec.kind,
+        status: spec.status,
+        theta,
+        cost: e.cost(),
+        n_points: data.len(),
+        n_free: problem.free.len(),
+        termination: best.result.termination,
+        iterations: best.result.iterations,
+        minima,
+        uncertainty: unc,
+        levels,
+        model_amplitudes: e.model,
+    })
+}
+
+/// Predicted first jump of each curve's model sweep (rad/s), `None` where
+/// the model sweep does not jump.
+pub fn predicted_jumps(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+) -> Result<Vec<Option<f64>>, SolveError> {
+    let model = normalised_model(theta);
+    data.curves
+        .iter()
+        .map(|c| {
+            let r = ForcedResponse::from_normalised(
+                &model,
+                theta[models::GAIN] * c.gamma,
+                Formulation::HarmonicBalance,
+            )?;
+            Ok(r.sweep(&c.omegas, c.direction)?
+                .jumps
+                .first()
+                .map(|j| j.omega))
+        })
+        .collect()
+}
+
+/// One row of the phase-quadrature table (Table 8 analogue).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhaseQuadratureRow {
+    pub level: String,
+    pub gamma: f64,
+    /// Measured (Ω, a): the 90° phase-lag crossing if the curve has phases
+    /// that cross 90°, else the amplitude peak.
+    pub measured_omega: f64,
+    pub measured_amplitude: f64,
+    /// `"phase"` or `"peak"`.
+    pub measured_from: &'static str,
+    /// Model phase-quadrature point (None if the curve never meets the backbone).
+    pub model_omega: Option<f64>,
+    pub model_amplitude: Option<f64>,
+}
+
+impl PhaseQuadratureRow {
+    /// `(model − measured)/measured` in %, frequency and amplitude.
+    pub fn differences_percent(&self) -> (Option<f64>, Option<f64>) {
+        (
+            self.model_omega
+                .map(|w| 100.0 * (w - self.measured_omega) / self.measured_omega),
+            self.model_amplitude
+                .map(|a| 100.0 * (a - self.measured_amplitude) / self.measured_amplitude),
+        )
+    }
+}
+
+/// Phase-quadrature table: one row per level (its up-sweep if present).
+pub fn phase_quadrature_table(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+) -> Result<Vec<PhaseQuadratureRow>, SolveError> {
+    let model = normalised_model(theta);
+    let mut rows = Vec::new();
+    for (level, gamma) in data.levels() {
+        let c = data
+            .curves
+            .iter()
+            .find(|c| c.level == level && c.direction == SweepDirection::Up)
+            .or_else(|| data.curves.iter().find(|c| c.level == level))
+            .expect("level has a curve");
+        let (mw, ma, from) = measured_quadrature(c);
+        let r = ForcedResponse::from_normalised(
+            &model,
+            theta[models::GAIN] * gamma,
+            Formulation::HarmonicBalance,
+        )?;
+        let pq = r.phase_quadrature()?;
+        rows.push(PhaseQuadratureRow {
+            level,
+            gamma,
+            measured_omega: mw,
+            measured_amplitude: ma,
+            measured_from: from,
+            model_omega: pq.map(|p| p.omega),
+            model_amplitude: pq.map(|p| p.amplitude),
+        });
+    }
+    Ok(rows)
+}
+
+fn measured_quadrature(c: &Curve) -> (f64, f64, &'static str) {
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    if let Some(ph) = &c.phases {
+        for i in 0..ph.len() - 1 {
+            let (p0, p1) = (ph[i] - half_pi, ph[i + 1] - half_pi);
+            if p0 == 0.0 {
+                return (c.omegas[i], c.amplitudes[i], "phase");
+            }
+            if p0 * p1 < 0.0 && (ph[i + 1] - ph[i]).abs() < 2.0 {
+                let t = p0 / (p0 - p1);
+                return (
+                    c.omegas[i] + t * (c.omegas[i + 1] - c.omegas[i]),
+                    c.amplitudes[i] + t * (c.amplitudes[i + 1] - c.amplitudes[i]),
+                    "phase",
+                );
+            }
+        }
+    }
+    let i = c.peak_index();
+    (c.omegas[i], c.amplitudes[i], "peak")
+}
+
+/// Result of the integer-exponent search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IntegerCandidate {
+    pub rho: Option<i64>,
+    pub eta: Option<i64>,
+    pub fit: Result<FitResult, FitError>,
+}
+
+/// `--integer`: for every integer value of each free exponent within its
+/// bounds, fixes the exponent(s) and fits the coefficients (local fit, or
+/// `opts.starts` multistart). Candidates in increasing (ρ, η) order; the
+/// caller picks the lowest cost.
+pub fn integer_search(data: &Dataset, spec: &FitSpec, opts: &FitOptions) -> Vec<IntegerCandidate> {
+    use rayon::prelude::*;
+    let range = |j: usize| -> Vec<Option<i64>> {
+        if spec.status[j] != Status::Free {
+            return vec![None];
+        }
+        let (lo, hi) = spec.bounds[j];
+        let lo = (lo.ceil() as i64).max(-2);
+        let hi = hi.floor() as i64;
+        (lo..=hi).map(Some).collect()
+    };
+    let mut pairs = Vec::new();
+    for r in range(models::RHO) {
+        for e in range(models::ETA) {
+            pairs.push((r, e));
+        }
+    }
+    pairs
+        .par_iter()
+        .map(|&(r, e)| {
+            let mut s = spec.clone();
+            if let Some(r) = r {
+                s.status[models::RHO] = Status::Fixed(r as f64);
+                s.start[models::RHO] = r as f64;
+                s.start[models::BETA] = rescale_start(spec, models::BETA, r as f64);
+            }
+            if let Some(e) = e {
+                s.status[models::ETA] = Status::Fixed(e as f64);
+                s.start[models::ETA] = e as f64;
+                s.start[models::KAPPA] = rescale_start(spec, models::KAPPA, e as f64);
+            }
+            IntegerCandidate {
+                rho: r,
+                eta: e,
+                fit: fit(data, &s, opts, &|| {}),
+            }
+        })
+        .collect()
+}
+
+/// Start of a coefficient after its exponent changes, keeping its
+/// equivalent value at the reference amplitude.
+fn rescale_start(spec: &FitSpec, j: usize, new_exp: f64) -> f64 {
+    use crate::power_law::g_unchecked;
+    let sc = spec.scales;
+    let (old_exp, base) = if j == models::BETA {
+        (spec.start[models::RHO], sc.a_ref)
+    } else {
+        (spec.start[models::ETA], sc.a_ref * sc.omega_ref)
+    };
+    spec.start[j] * g_unchecked(old_exp) * base.powf(old_exp)
+        / (g_unchecked(new_exp) * base.powf(new_exp))
+}

@@ -1,0 +1,697 @@
+//! The Eq 31 objective and its analytic Jacobian.
+//!
+//! ```text
+//! cost(θ) = Σ_levels Σ_steps w · ( a_model(Ω; θ, γ)/γ − a_meas/γ )²          (Eq 31)
+//! ```
+//!
+//! `a_model` is the amplitude the model's stepped-sine sweep reaches at each
+//! step, following the branch in the same direction as the measured sweep
+//! ([`crate::ForcedResponse::sweep`]), so fits through jumps are consistent
+//! with what the shaker saw. The model sees the input `gain · γ`.
+//!
+//! ## Jacobian by implicit differentiation
+//! At each root `a` of the first-order harmonic-balance equation
+//!
+//! ```text
+//! F(a, θ) = a² [ S² + Ω² D² ] − (gain γ)² = 0,
+//! S = α + g(ρ) β a^ρ − Ω²,   D = δ + g(η) κ Ω^η a^η
+//! ```
+//!
+//! `da/dθ = −(∂F/∂θ)/(∂F/∂a)` with (dividing both by 2a²)
+//!
+//! ```text
+//! ∂F/∂a / (2a)  = S² + Ω²D² + ρ S g(ρ)β a^ρ + η Ω² D g(η) κ (Ωa)^η
+//! ∂F/∂α /(2a²)  = S                ∂F/∂δ /(2a²) = Ω² D
+//! ∂F/∂β /(2a²)  = S g(ρ) a^ρ       ∂F/∂κ /(2a²) = Ω² D g(η) (Ωa)^η
+//! ∂F/∂ρ /(2a²)  = S β a^ρ (g'(ρ) + g(ρ) ln a)
+//! ∂F/∂η /(2a²)  = Ω² D κ (Ωa)^η (g'(η) + g(η) ln(Ωa))
+//! ∂F/∂gain/(2a²) = −gain γ² / a²
+//! ```
+//!
+//! with `g'(μ) = g(μ)(ψ((3+μ)/2) − ψ(2+μ/2))/2` ([`crate::special`]).
+//!
+//! ## Optimisation variables
+//! Coefficients are log-scaled. The nonlinear coefficients are further
+//! expressed at a reference amplitude `A_ref` (the largest measured
+//! amplitude) and frequency `Ω_ref` (where it was measured), which
+//! decorrelates them from the exponents:
+//!
+//! ```text
+//! u_α = ln α, u_δ = ln δ, u_gain = ln gain, u_ρ = ρ, u_η = η
+//! u_β = ln β_ref,  β_ref = g(ρ) β A_ref^ρ           (k_eq/m at A_ref, 1/s²)
+//! u_κ = ln κ_ref,  κ_ref = g(η) κ (Ω_ref A_ref)^η   (c_eq/m at A_ref, Ω_ref, 1/s)
+//! ```
+//!
+//! Consequence: nonlinear stiffness is hardening (β > 0) in the fit.
+
+use super::data::Dataset;
+use super::models::*;
+use crate::error::SolveError;
+use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
+use crate::model::NormalisedModel;
+use crate::power_law::g_unchecked;
+use crate::special::g_derivative;
+
+/// Role of one parameter in a fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Status {
+    /// Not part of the model (value 0).
+    Absent,
+    /// Held at the given value (natural units).
+    Fixed(f64),
+    /// Estimated.
+    Free,
+}
+
+/// Amplitude and frequency at which the nonlinear coefficients are scaled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scales {
+    /// A_ref, m.
+    pub a_ref: f64,
+    /// Ω_ref, rad/s.
+    pub omega_ref: f64,
+}
+
+/// The model structure of one fit: status of each parameter, box bounds
+/// of the optimisation variables (in natural units, see the module docs:
+/// for β and κ the bounds apply to β_ref and κ_ref), and the start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitSpec {
+    pub kind: ModelKind,
+    pub status: [Status; N_PARAMS],
+    pub bounds: [(f64, f64); N_PARAMS],
+    /// Data-derived start, natural θ (β, κ as true coefficients).
+    pub start: [f64; N_PARAMS],
+    pub scales: Scales,
+}
+
+/// Problem-specification errors.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SpecError {
+    #[error("unknown parameter '{0}' (expected one of alpha, delta, beta, rho, kappa, eta, gain)")]
+    UnknownParameter(String),
+    #[error("parameter {name} is not part of the {model} model")]
+    NotInModel {
+        name: &'static str,
+        model: ModelKind,
+    },
+    #[error("the mass m is not identifiable from acceleration-input data: only ratios to m (alpha = k/m, delta = c/m, beta = k_r/m, kappa = c_e/m) are; give a mass with --mass to convert")]
+    MassNotIdentifiable,
+    #[error("fixed value {name} = {value} is invalid: {why}")]
+    BadFixedValue {
+        name: &'static str,
+        value: f64,
+        why: &'static str,
+    },
+    #[error("bounds for {name}: [{min}, {max}] are invalid: need finite min < max{extra}")]
+    BadBounds {
+        name: &'static str,
+        min: f64,
+        max: f64,
+        extra: &'static str,
+    },
+    #[error("no free parameter left to fit")]
+    NothingFree,
+}
+
+fn is_log(j: usize) -> bool {
+    !(j == RHO || j == ETA)
+}
+
+impl FitSpec {
+    /// Default structure and bounds for `kind`, derived from the data:
+    ///
+    /// * ω_n and ζ from the peak of the lowest level: `α₀ = Ω_peak²`,
+    ///   `δ₀ = γ / (a_peak Ω_peak)` (linear resonance height `γ/(δΩ)`);
+    /// * `β_ref,0 = Ω_peak,high² − α₀` from the peak shift up to the highest
+    ///   level (at least `0.01 α₀`), `κ_ref,0 = δ₀/2`;
+    /// * bounds: α ∈ [(Ω_min/2)², (1.5 Ω_max)²] over the data's frequencies;
+    ///   δ ∈ [1e-4 δ₀, 1e2 δ₀]; β_ref ∈ [1e-6 α₀, 2 α₀];
+    ///   κ_ref ∈ [1e-6 δ₀, 1e2 δ₀]; ρ ∈ [0, 10]; η ∈ [−1, 8];
+    ///   gain ∈ [0.1, 10] (fixed at 1 unless freed).
+    pub fn new(kind: ModelKind, data: &Dataset) -> Self {
+        let low = lowest_curve(data, true);
+        let high = lowest_curve(data, false);
+        let (wp, ap, gl) = {
+            let c = &data.curves[low];
+            let i = c.peak_index();
+            (c.omegas[i], c.amplitudes[i].max(f64::MIN_POSITIVE), c.gamma)
+        };
+        let (wh, _ah) = {
+            let c = &data.curves[high];
+            let i = c.peak_index();
+            (c.omegas[i], c.amplitudes[i])
+        };
+        let (mut a_ref, mut omega_ref) = (0.0f64, wp);
+        let (mut wmin, mut wmax) = (f64::INFINITY, 0.0f64);
+        for c in &data.curves {
+            for (&w, &a) in c.omegas.iter().zip(&c.amplitudes) {
+                if a > a_ref {
+                    a_ref = a;
+                    omega_ref = w;
+                }
+                wmin = wmin.min(w);
+                wmax = wmax.max(w);
+            }
+        }
+        if !(a_ref > 0.0) {
+            a_ref = 1.0;
+        }
+        let alpha0 = wp * wp;
+        let delta0 = gl / (ap * wp);
+        let beta_ref0 = (wh * wh - alpha0).max(0.01 * alpha0);
+        let kappa_ref0 = 0.5 * delta0;
+        let scales = Scales { a_ref, omega_ref };
+        let mut status = [
+            Status::Free,
+            Status::Free,
+            Status::Absent,
+            Status::Absent,
+            Status::Absent,
+            Status::Absent,
+            Status::Fixed(1.0),
+        ];
+        let mut start = [alpha0, delta0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        match kind.stiffness() {
+            Term::Absent => {}
+            Term::FixedExponent(r) => {
+                status[BETA] = Status::Free;
+                status[RHO] = Status::Fixed(r);
+                start[RHO] = r;
+            }
+            Term::FreeExponent => {
+                status[BETA] = Status::Free;
+                status[RHO] = Status::Free;
+                start[RHO] = 2.0;
+            }
+        }
+        match kind.damping() {
+            Term::Absent => {}
+            Term::FixedExponent(e) => {
+                status[KAPPA] = Status::Free;
+                status[ETA] = Status::Fixed(e);
+                start[ETA] = e;
+            }
+            Term::FreeExponent => {
+                status[KAPPA] = Status::Free;
+                status[ETA] = Status::Free;
+                start[ETA] = 1.0;
+            }
+        }
+        if status[KAPPA] != Status::Absent {
+            start[DELTA] = 0.5 * delta0;
+        }
+        if status[BETA] != Status::Absent {
+            start[BETA] = beta_ref0 / (g_unchecked(start[RHO]) * a_ref.powf(start[RHO]));
+        }
+        if status[KAPPA] != Status::Absent {
+            start[KAPPA] =
+                kappa_ref0 / (g_unchecked(start[ETA]) * (omega_ref * a_ref).powf(start[ETA]));
+        }
+        let bounds = [
+            ((0.5 * wmin).powi(2), (1.5 * wmax).powi(2)),
+            (1e-4 * delta0, 1e2 * delta0),
+            (1e-6 * alpha0, 2.0 * alpha0),
+            (0.0, 10.0),
+            (1e-6 * delta0, 1e2 * delta0),
+            (-1.0, 8.0),
+            (0.1, 10.0),
+        ];
+        Self {
+            kind,
+            status,
+            bounds,
+            start,
+            scales,
+        }
+    }
+
+    /// Holds parameter `name` at `value` (natural units).
+    pub fn fix(&mut self, name: &str, value: f64) -> Result<(), SpecError> {
+        let j = self.index(name)?;
+        let pname = PARAM_NAMES[j];
+        if !value.is_finite() {
+            return Err(SpecError::BadFixedValue {
+                name: pname,
+                value,
+                why: "not finite",
+            });
+        }
+        match j {
+            ALPHA | GAIN if value <= 0.0 => {
+                return Err(SpecError::BadFixedValue {
+                    name: pname,
+                    value,
+                    why: "must be > 0",
+                })
+            }
+            DELTA | KAPPA if value < 0.0 => {
+                return Err(SpecError::BadFixedValue {
+                    name: pname,
+                    value,
+                    why: "must be >= 0",
+                })
+            }
+            RHO | ETA if value <= -3.0 => {
+                return Err(SpecError::BadFixedValue {
+                    name: pname,
+                    value,
+                    why: "exponent must be > -3",
+                })
+            }
+            BETA if value <= 0.0 => {
+                return Err(SpecError::BadFixedValue {
+                    name: pname,
+                    value,
+                    why: "must be > 0 (hardening; the fit does not support softening)",
+                })
+            }
+            _ => {}
+        }
+        self.status[j] = Status::Fixed(value);
+        self.start[j] = value;
+        Ok(())
+    }
+
+    /// Estimates parameter `name` (e.g. `gain`, or an exponent the model fixes).
+    pub fn free(&mut self, name: &str) -> Result<(), SpecError> {
+        let j = self.index(name)?;
+        self.status[j] = Status::Free;
+        Ok(())
+    }
+
+    /// Replaces the bounds of `name` (for β and κ: of β_ref and κ_ref).
+    pub fn set_bounds(&mut self, name: &str, min: f64, max: f64) -> Result<(), SpecError> {
+        let j = self.index(name)?;
+        let pname = PARAM_NAMES[j];
+        if !(min.is_finite() && max.is_finite() && min < max) {
+            return Err(SpecError::BadBounds {
+                name: pname,
+                min,
+                max,
+                extra: "",
+            });
+        }
+        if is_log(j) && min <= 0.0 {
+            return Err(SpecError::BadBounds {
+                name: pname,
+                min,
+                max,
+                extra: " and min > 0 (log-scaled coefficient)",
+            });
+        }
+        if !is_log(j) && min <= -3.0 {
+            return Err(SpecError::BadBounds {
+                name: pname,
+                min,
+                max,
+                extra: " and min > -3 (exponent)",
+            });
+        }
+        self.bounds[j] = (min, max);
+        Ok(())
+    }
+
+    fn index(&self, name: &str) -> Result<usize, SpecError> {
+        let n = name.trim().to_ascii_lowercase();
+        if n == "m" || n == "mass" {
+            return Err(SpecError::MassNotIdentifiable);
+        }
+        let j = param_index(&n).ok_or_else(|| SpecError::UnknownParameter(name.to_string()))?;
+        let absent = match j {
+            BETA | RHO => self.kind.stiffness() == Term::Absent,
+            KAPPA | ETA => self.kind.damping() == Term::Absent,
+            _ => false,
+        };
+        if absent {
+            return Err(SpecError::NotInModel {
+                name: PARAM_NAMES[j],
+                model: self.kind,
+            });
+        }
+        Ok(j)
+    }
+
+    /// Indices of the free parameters, in θ order.
+    pub fn free_indices(&self) -> Vec<usize> {
+        (0..N_PARAMS)
+            .filter(|&j| self.status[j] == Status::Free)
+            .collect()
+    }
+}
+
+/// Index of the curve with the lowest (`lowest = true`) or highest γ,
+/// preferring up-sweeps.
+fn lowest_curve(data: &Dataset, lowest: bool) -> usize {
+    let key = |i: usize| {
+        let c = &data.curves[i];
+        let g = if lowest { c.gamma } else { -c.gamma };
+        (
+            g,
+            if c.direction == SweepDirection::Up {
+                0
+            } else {
+                1
+            },
+        )
+    };
+    (0..data.curves.len())
+        .min_by(|&a, &b| key(a).partial_cmp(&key(b)).unwrap())
+        .unwrap()
+}
+
+/// The model amplitudes, residuals and (optionally) the Jacobian with respect
+/// to all seven natural parameters.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// Model amplitude at each step, m, in data order (curve by curve, increasing Ω).
+    pub model: Vec<f64>,
+    /// `√w (a_model − a_meas)/γ`.
+    pub residuals: Vec<f64>,
+    /// `∂r/∂θ` per step for θ = (α, δ, β, ρ, κ, η, gain).
+    pub jacobian: Option<Vec<[f64; N_PARAMS]>>,
+}
+
+impl Evaluation {
+    pub fn cost(&self) -> f64 {
+        self.residuals.iter().map(|r| r * r).sum()
+    }
+}
+
+/// Mass-normalised model of θ.
+pub fn normalised_model(theta: &[f64; N_PARAMS]) -> NormalisedModel {
+    NormalisedModel {
+        alpha: theta[ALPHA],
+        delta: theta[DELTA],
+        beta: theta[BETA],
+        rho: theta[RHO],
+        kappa: theta[KAPPA],
+        eta: theta[ETA],
+    }
+}
+
+/// `da/dθ` at a root `a` of the harmonic-balance equation (see module docs).
+pub fn amplitude_derivatives(
+    theta: &[f64; N_PARAMS],
+    gamma: f64,
+    omega: f64,
+    a: f64,
+) -> [f64; N_PARAMS] {
+    let (alpha, delta, beta, rho, kappa, eta, gain) = (
+        theta[ALPHA],
+        theta[DELTA],
+        theta[BETA],
+        theta[RHO],
+        theta[KAPPA],
+        theta[ETA],
+        theta[GAIN],
+    );
+    let w2 = omega * omega;
+    let la = a.ln();
+    let (gr, gbar) = if beta != 0.0 {
+        let gr = g_unchecked(rho);
+        (gr, gr * beta * (rho * la).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let lwa = (omega * a).ln();
+    let (ge, gkw) = if kappa != 0.0 {
+        let ge = g_unchecked(eta);
+        (ge, ge * kappa * (eta * lwa).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let s = alpha + gbar - w2;
+    let d = delta + gkw;
+    let fa = s * s + w2 * d * d + rho * s * gbar + eta * w2 * d * gkw;
+    let mut h = [0.0; N_PARAMS];
+    h[ALPHA] = s;
+    h[DELTA] = w2 * d;
+    if beta != 0.0 {
+        let ar = (rho * la).exp();
+        h[BETA] = s * gr * ar;
+        h[RHO] = s * beta * ar * (g_derivative(rho) + gr * la);
+    }
+    if kappa != 0.0 {
+        let wae = (eta * lwa).exp();
+        h[KAPPA] = w2 * d * ge * wae;
+        h[ETA] = w2 * d * kappa * wae * (g_derivative(eta) + ge * lwa);
+    }
+    h[GAIN] = -gain * gamma * gamma / (a * a);
+    let mut out = [0.0; N_PARAMS];
+    for j in 0..N_PARAMS {
+        out[j] = -a * h[j] / fa;
+    }
+    out
+}
+
+/// Model amplitudes of every curve at θ (branch-following sweeps), in
+/// data order; sticking points give 0.
+pub fn model_amplitudes(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+) -> Result<Vec<Vec<f64>>, SolveError> {
+    use rayon::prelude::*;
+    let model = normalised_model(theta);
+    data.curves
+        .par_iter()
+        .map(|c| {
+            let r = ForcedResponse::from_normalised(
+                &model,
+                theta[GAIN] * c.gamma,
+                Formulation::HarmonicBalance,
+            )?;
+            let sw = r.sweep(&c.omegas, c.direction)?;
+            let mut amps: Vec<f64> = sw
+                .points
+                .iter()
+                .map(|p| if p.sticking { 0.0 } else { p.amplitude })
+                .collect();
+            if c.direction == SweepDirection::Down {
+                amps.reverse();
+            }
+            Ok(amps)
+        })
+        .collect()
+}
+
+/// Evaluates Eq 31's residuals at θ, with the Jacobian if `jacobian`.
+pub fn evaluate(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+    jacobian: bool,
+) -> Result<Evaluation, SolveError> {
+    let amps = model_amplitudes(data, theta)?;
+    let n = data.len();
+    let mut model = Vec::with_capacity(n);
+    let mut residuals = Vec::with_capacity(n);
+    let mut jac = jacobian.then(|| Vec::with_capacity(n));
+    for (c, am) in data.curves.iter().zip(&amps) {
+        for i in 0..c.omegas.len() {
+            let sw = c.weights[i].sqrt();
+            let a = am[i];
+            model.push(a);
+            residuals.push(sw * (a - c.amplitudes[i]) / c.gamma);
+            if let Some(j) = jac.as_mut() {
+                let row = if a > 0.0 {
+                    let mut d = amplitude_derivatives(theta, c.gamma, c.omegas[i], a);
+                    for v in d.iter_mut() {
+                        *v *= sw / c.gamma;
+                    }
+                    d
+                } else {
+                    [0.0; N_PARAMS]
+                };
+                j.push(row);
+            }
+        }
+    }
+    Ok(Evaluation {
+        model,
+        residuals,
+        jacobian: jac,
+    })
+}
+
+/// The fit problem in optimisation variables `u` (module docs).
+#[derive(Debug, Clone)]
+pub struct Problem<'a> {
+    pub data: &'a Dataset,
+    pub spec: &'a FitSpec,
+    pub free: Vec<usize>,
+}
+
+impl<'a> Problem<'a> {
+    pub fn new(data: &'a Dataset, spec: &'a FitSpec) -> Result<Self, SpecError> {
+        let free = spec.free_indices();
+        if free.is_empty() {
+            return Err(SpecError::NothingFree);
+        }
+        Ok(Self { data, spec, free })
+    }
+
+    fn value_or(&self, j: usize, u: &[f64]) -> f64 {
+        match self.spec.status[j] {
+            Status::Absent => 0.0,
+            Status::Fixed(v) => v,
+            Status::Free => {
+                let k = self.free.iter().position(|&f| f == j).unwrap();
+                u[k]
+            }
+        }
+    }
+
+    fn beta_scale(&self, rho: f64) -> f64 {
+        g_unchecked(rho) * self.spec.scales.a_ref.powf(rho)
+    }
+
+    fn kappa_scale(&self, eta: f64) -> f64 {
+        g_unchecked(eta) * (self.spec.scales.omega_ref * self.spec.scales.a_ref).powf(eta)
+    }
+
+    /// θ from u.
+    pub fn theta(&self, u: &[f64]) -> [f64; N_PARAMS] {
+        let mut th = [0.0; N_PARAMS];
+        for j in [ALPHA, DELTA, RHO, ETA, GAIN] {
+            let v = self.value_or(j, u);
+            th[j] = if self.spec.status[j] == Status::Free && is_log(j) {
+                v.exp()
+            } else {
+                v
+            };
+        }
+        for (j, e, sc) in [(BETA, RHO, 0), (KAPPA, ETA, 1)] {
+            th[j] = match self.spec.status[j] {
+                Status::Free => {
+                    let v = self.value_or(j, u).exp();
+                    v / if sc == 0 {
+                        self.beta_scale(th[e])
+                    } else {
+                        self.kappa_scale(th[e])
+                    }
+                }
+                _ => self.value_or(j, u),
+            };
+        }
+        th
+    }
+
+    /// u from θ (inverse of [`Self::theta`] on the free entries).
+    pub fn u_of(&self, th: &[f64; N_PARAMS]) -> Vec<f64> {
+        self.free
+            .iter()
+            .map(|&j| match j {
+                RHO | ETA => th[j],
+                BETA => (th[BETA] * self.beta_scale(th[RHO])).ln(),
+                KAPPA => (th[KAPPA] * self.kappa_scale(th[ETA])).ln(),
+                _ => th[j].ln(),
+            })
+            .collect()
+    }
+
+    /// Box bounds in u.
+    pub fn u_bounds(&self) -> (Vec<f64>, Vec<f64>) {
+        self.free
+            .iter()
+            .map(|&j| {
+                let (lo, hi) = self.spec.bounds[j];
+                if is_log(j) {
+                    (lo.ln(), hi.ln())
+                } else {
+                    (lo, hi)
+                }
+            })
+            .unzip()
+    }
+
+    /// `∂θ_j/∂u_k` (7 × n_free, row-major).
+    pub fn dtheta_du(&self, th: &[f64; N_PARAMS]) -> Vec<[f64; N_PARAMS]> {
+        // column k for each free k, stored as [f64; 7]
+        let mut cols = vec![[0.0; N_PARAMS]; self.free.len()];
+        let pos = |j: usize| self.free.iter().position(|&f| f == j);
+        for (k, &j) in self.free.iter().enumerate() {
+            cols[k][j] = if is_log(j) { th[j] } else { 1.0 };
+        }
+        if let (Some(_), Some(kr)) = (pos(BETA), pos(RHO)) {
+            let rho = th[RHO];
+            cols[kr][BETA] =
+                -th[BETA] * (g_derivative(rho) / g_unchecked(rho) + self.spec.scales.a_ref.ln());
+        }
+        if let (Some(_), Some(ke)) = (pos(KAPPA), pos(ETA)) {
+            let eta = th[ETA];
+            cols[ke][KAPPA] = -th[KAPPA]
+                * (g_derivative(eta) / g_unchecked(eta)
+                    + (self.spec.scales.omega_ref * self.spec.scales.a_ref).ln());
+        }
+        cols
+    }
+}
+
+/// Whether the first step of some curve (in sweep order) has more than one
+/// stable steady state. The sweep then has to integrate the slow flow from
+/// rest to pick one, which is slow for the extreme parameter sets a global
+/// search visits; the optimiser treats such θ as infeasible.
+pub fn ambiguous_start(data: &Dataset, theta: &[f64; N_PARAMS]) -> bool {
+    let model = normalised_model(theta);
+    data.curves.iter().any(|c| {
+        let w = match c.direction {
+            SweepDirection::Up => c.omegas[0],
+            SweepDirection::Down => c.omegas[c.omegas.len() - 1],
+        };
+        match ForcedResponse::from_normalised(
+            &model,
+            theta[GAIN] * c.gamma,
+            Formulation::HarmonicBalance,
+        )
+        .and_then(|r| r.steady_states(w))
+        {
+            Ok(set) => set.roots.iter().filter(|s| s.stable).count() > 1,
+            Err(_) => true,
+        }
+    })
+}
+
+impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
+    fn n_params(&self) -> usize {
+        self.free.len()
+    }
+
+    fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
+        let th = self.theta(u);
+        if ambiguous_start(self.data, &th) {
+            return None;
+        }
+        let e = evaluate(self.data, &th, false).ok()?;
+        e.residuals
+            .iter()
+            .all(|r| r.is_finite())
+            .then_some(e.residuals)
+    }
+
+    fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let th = self.theta(u);
+        if ambiguous_start(self.data, &th) {
+            return None;
+        }
+        let e = evaluate(self.data, &th, true).ok()?;
+        let cols = self.dtheta_du(&th);
+        let n = self.free.len();
+        let jt = e.jacobian.as_ref()?;
+        let mut j = Vec::with_capacity(jt.len() * n);
+        for row in jt {
+            for col in &cols {
+                let mut s = 0.0;
+                for p in 0..N_PARAMS {
+                    if col[p] != 0.0 {
+                        s += row[p] * col[p];
+                    }
+                }
+                j.push(if s.is_finite() { s } else { 0.0 });
+            }
+        }
+        e.residuals
+            .iter()
+            .all(|r| r.is_finite())
+            .then_some((e.residuals, j))
+    }
+}

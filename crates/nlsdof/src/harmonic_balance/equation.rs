@@ -366,40 +366,7 @@ impl ResponseEquation {
     /// is known to be unique and `ln P` increasing up to `t_max` (with
     /// `ln P > 0` beyond). Returns `None` if it fails to converge.
     pub fn solve_unique(&self, t0: f64, t_max: f64) -> Option<f64> {
-        let (mut lo, mut hi) = (f64::NEG_INFINITY, t_max);
-        let mut t = t0.min(t_max);
-        for _ in 0..60 {
-            let (f, fp) = self.ln_p_and_slope(t);
-            if f == 0.0 {
-                return Some(t);
-            }
-            if f < 0.0 {
-                lo = lo.max(t);
-            } else {
-                hi = hi.min(t);
-            }
-            let step = f / fp;
-            let mut next = t - step;
-            // quadratic convergence: the error after this step is O(step²)
-            // (ln P is nearly linear in t), below ε once |step| < 1e-9
-            if fp > 0.0 && step.abs() < 1e-9 && next > lo && next < hi {
-                return Some(next);
-            }
-            if !(fp > 0.0) || !next.is_finite() || next <= lo || next >= hi {
-                next = if lo.is_finite() && hi.is_finite() {
-                    0.5 * (lo + hi)
-                } else if lo.is_finite() {
-                    lo + 1.0
-                } else {
-                    hi - 1.0
-                };
-            }
-            if (next - t).abs() <= 4.0 * f64::EPSILON * (1.0 + t.abs()) {
-                return Some(next);
-            }
-            t = next;
-        }
-        None
+        self.solve_unique_state(t0, t_max).map(|s| s.t)
     }
 }
 
@@ -493,8 +460,10 @@ mod tests {
             let st = eq
                 .solve_unique_state(t0, eq.amplitude_bound().ln())
                 .unwrap();
-            let t = eq.solve_unique(t0, eq.amplitude_bound().ln()).unwrap();
-            assert!((st.t - t).abs() < 1e-14);
+            // independent oracle: exact root isolation
+            let iso = eq.roots_t().unwrap();
+            assert_eq!(iso.len(), 1);
+            assert!((st.t - iso[0]).abs() < 1e-14);
             let (ph, stable) = eq.phase_and_stability_t(st.t);
             assert!((st.phase - ph).abs() < 1e-15, "{} vs {}", st.phase, ph);
             assert_eq!(st.stable, stable);

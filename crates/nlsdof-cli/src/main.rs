@@ -45,6 +45,10 @@ enum Command {
     /// Identify the linear part (m, c, k or k/m, c/m) from a measured FRF by fast relaxed vector fitting.
     #[command(name = "linear-id")]
     LinearId(cmd::linear_id::Args),
+    /// STFT spectrogram of a recorded signal, optionally compared with another (Eq 33), with PNG heat map and waterfall.
+    Spectrogram(cmd::spectrogram::Args),
+    /// The paper's whole workflow on a built-in virtual HAR wing: test, identify, simulate, compare; writes a report folder.
+    Demo(cmd::demo::Args),
 }
 
 fn main() {
@@ -94,6 +98,8 @@ fn main() {
         Command::Compare(a) => cmd::compare::run(a),
         Command::FrfEstimate(a) => cmd::frf_estimate::run(a),
         Command::LinearId(a) => cmd::linear_id::run(a),
+        Command::Spectrogram(a) => cmd::spectrogram::run(a),
+        Command::Demo(a) => cmd::demo::run(a),
     };
     if let Err(e) = result {
         eprintln!("nlsdof: error: {e}");

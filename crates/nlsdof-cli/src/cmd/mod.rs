@@ -1,5 +1,6 @@
 //! One module per CLI verb.
 pub mod compare;
+pub mod demo;
 pub mod equiv;
 pub mod fit;
 pub mod frf;
@@ -8,4 +9,5 @@ pub mod linear_id;
 pub mod roots;
 pub mod signal;
 pub mod simulate;
+pub mod spectrogram;
 pub mod stepped_sine;

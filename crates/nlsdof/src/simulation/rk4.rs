@@ -184,6 +184,115 @@ fn uniform1<S: Law, D: Law, F: FnMut(Sample)>(
     })
 }
 
+/// Output bookkeeping shared by the two-samples-per-step drivers
+/// ([`uniform2`], [`uniform2_predicted`]): emission of the mid-step sample
+/// (cubic Hermite interpolation at the half step) and of the step end, and
+/// the final single-sample step when the number of intervals is odd.
+struct TwoSampleOutput {
+    dec: Decimator,
+    outputs: usize,
+    t0: f64,
+    dt: f64,
+}
+
+impl TwoSampleOutput {
+    /// The initial sample has been emitted by the caller.
+    fn new(decimation: usize, t0: f64, dt: f64) -> Self {
+        Self {
+            dec: Decimator::new(decimation),
+            outputs: 1,
+            t0,
+            dt,
+        }
+    }
+
+    /// Emits samples `i + 1` (Hermite midpoint
+    /// `x_m = (x + x_n)/2 + h/8 (v − v_n)`, `v_m = (v + v_n)/2 + h/8 (a − a_n)`)
+    /// and `i + 2` (step end), subject to decimation.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn emit_pair<M: MulAdd, F: FnMut(Sample)>(
+        &mut self,
+        sink: &mut F,
+        i: usize,
+        (um, u1): (f64, f64),
+        (x, v, a0): (f64, f64, f64),
+        (xn, vn, an): (f64, f64, f64),
+        h8: f64,
+    ) {
+        let (t0, dt) = (self.t0, self.dt);
+        if self.dec.tick() {
+            sink(Sample {
+                index: i + 1,
+                t: t0 + (i + 1) as f64 * dt,
+                u: um,
+                x: M::madd(0.5, x + xn, h8 * (v - vn)),
+                v: M::madd(0.5, v + vn, h8 * (a0 - an)),
+            });
+            self.outputs += 1;
+        }
+        if self.dec.tick() {
+            sink(Sample {
+                index: i + 2,
+                t: t0 + (i + 2) as f64 * dt,
+                u: u1,
+                x: xn,
+                v: vn,
+            });
+            self.outputs += 1;
+        }
+    }
+
+    /// After the paired steps ended at sample `i` (input `u0`, state
+    /// `x, v, a0`): one last single-sample step if an interval is left
+    /// (odd number of intervals), then the summary.
+    #[allow(clippy::too_many_arguments)]
+    fn finish<S: Law, D: Law, F: FnMut(Sample)>(
+        mut self,
+        d: &Dyn<S, D>,
+        vals: &[f64],
+        g: f64,
+        (i, u0): (usize, f64),
+        (mut x, mut v, a0): (f64, f64, f64),
+        mut rhs: u64,
+        sink: &mut F,
+    ) -> Result<Summary, SimulationError> {
+        let (t0, dt, n) = (self.t0, self.dt, vals.len());
+        let mut steps = (i / 2) as u64;
+        rhs += 4 * steps;
+        if i + 1 < n {
+            let u1 = g * vals[i + 1];
+            (x, v) = step(d, x, v, a0, dt, 0.5 * (u0 + u1), u1);
+            if !(x.is_finite() && v.is_finite()) {
+                return Err(diverged(t0 + (i + 1) as f64 * dt, x, v));
+            }
+            steps += 1;
+            rhs += 3;
+            if self.dec.tick() {
+                sink(Sample {
+                    index: i + 1,
+                    t: t0 + (i + 1) as f64 * dt,
+                    u: u1,
+                    x,
+                    v,
+                });
+                self.outputs += 1;
+            }
+        }
+        Ok(Summary {
+            samples: n,
+            outputs: self.outputs,
+            steps,
+            rejected_steps: 0,
+            rhs_evaluations: rhs,
+            events: 0,
+            samples_per_step: 2,
+            final_state: State { x, v },
+            final_time: t0 + (n - 1) as f64 * dt,
+        })
+    }
+}
+
 fn uniform2<S: Law, D: Law, F: FnMut(Sample)>(
     d: &Dyn<S, D>,
     vals: &[f64],
@@ -206,12 +315,12 @@ fn uniform2<S: Law, D: Law, F: FnMut(Sample)>(
         x,
         v,
     });
-    let mut outputs = 1;
-    let mut dec = Decimator::new(opts.decimation);
+    let mut out = TwoSampleOutput::new(opts.decimation, t0, dt);
     // a0 = acceleration at the current step start; the end acceleration of
     // one step is the first stage of the next (first same as last).
     let mut a0 = u0 - d.internal(x, v);
-    let mut rhs: u64 = 1;
+    // one evaluation for the initial acceleration
+    let rhs: u64 = 1;
     let mut i = 0;
     while i + 2 < n {
         let um = g * vals[i + 1];
@@ -221,67 +330,14 @@ fn uniform2<S: Law, D: Law, F: FnMut(Sample)>(
         if !(xn.is_finite() && vn.is_finite() && an.is_finite()) {
             return Err(diverged(t0 + (i + 2) as f64 * dt, xn, vn));
         }
-        if dec.tick() {
-            let xm = 0.5 * (x + xn) + h8 * (v - vn);
-            let vm = 0.5 * (v + vn) + h8 * (a0 - an);
-            sink(Sample {
-                index: i + 1,
-                t: t0 + (i + 1) as f64 * dt,
-                u: um,
-                x: xm,
-                v: vm,
-            });
-            outputs += 1;
-        }
-        if dec.tick() {
-            sink(Sample {
-                index: i + 2,
-                t: t0 + (i + 2) as f64 * dt,
-                u: u1,
-                x: xn,
-                v: vn,
-            });
-            outputs += 1;
-        }
+        out.emit_pair::<NoFma, F>(sink, i, (um, u1), (x, v, a0), (xn, vn, an), h8);
         x = xn;
         v = vn;
         a0 = an;
         u0 = u1;
         i += 2;
     }
-    let mut steps = (i / 2) as u64;
-    rhs += 4 * steps;
-    if i + 1 < n {
-        // odd number of intervals: one last single-sample step
-        let u1 = g * vals[i + 1];
-        (x, v) = step(d, x, v, a0, dt, 0.5 * (u0 + u1), u1);
-        if !(x.is_finite() && v.is_finite()) {
-            return Err(diverged(t0 + (i + 1) as f64 * dt, x, v));
-        }
-        steps += 1;
-        rhs += 3;
-        if dec.tick() {
-            sink(Sample {
-                index: i + 1,
-                t: t0 + (i + 1) as f64 * dt,
-                u: u1,
-                x,
-                v,
-            });
-            outputs += 1;
-        }
-    }
-    Ok(Summary {
-        samples: n,
-        outputs,
-        steps,
-        rejected_steps: 0,
-        rhs_evaluations: rhs,
-        events: 0,
-        samples_per_step: 2,
-        final_state: State { x, v },
-        final_time: t0 + (n - 1) as f64 * dt,
-    })
+    out.finish(d, vals, g, (i, u0), (x, v, a0), rhs, sink)
 }
 
 /// Stage of [`uniform2_predicted`]: `u − f(x, v)` with the power laws
@@ -337,7 +393,6 @@ fn uniform2_predicted<S: Law, D: Law, F: FnMut(Sample), M: MulAdd>(
     let dt = 1.0 / fs;
     let h = 2.0 * dt;
     let h8 = 0.125 * h;
-    let n = vals.len();
     let State { mut x, mut v } = opts.initial;
     let mut u0 = g * vals[0];
     sink(Sample {
@@ -347,10 +402,10 @@ fn uniform2_predicted<S: Law, D: Law, F: FnMut(Sample), M: MulAdd>(
         x,
         v,
     });
-    let mut outputs = 1;
-    let mut dec = Decimator::new(opts.decimation);
+    let mut out = TwoSampleOutput::new(opts.decimation, t0, dt);
     let mut a0 = u0 - d.internal(x, v);
-    let mut rhs: u64 = 1;
+    // one evaluation for the initial acceleration
+    let rhs: u64 = 1;
     // references for (middle, end) of the current step and of the next one
     let (mut cur_m, mut cur_e) = (
         (d.s.make_ref(x), d.d.make_ref(v)),
@@ -398,66 +453,14 @@ fn uniform2_predicted<S: Law, D: Law, F: FnMut(Sample), M: MulAdd>(
         cur_m = nxt_m;
         cur_e = nxt_e;
         (nxt_m, nxt_e) = d.make_refs::<M>(xm, xe, vm, ve);
-        if dec.tick() {
-            let xmid = M::madd(0.5, x + xn, h8 * (v - vn));
-            let vmid = M::madd(0.5, v + vn, h8 * (a0 - an));
-            sink(Sample {
-                index: i + 1,
-                t: t0 + (i + 1) as f64 * dt,
-                u: um,
-                x: xmid,
-                v: vmid,
-            });
-            outputs += 1;
-        }
-        if dec.tick() {
-            sink(Sample {
-                index: i + 2,
-                t: t0 + (i + 2) as f64 * dt,
-                u: u1,
-                x: xn,
-                v: vn,
-            });
-            outputs += 1;
-        }
+        out.emit_pair::<M, F>(sink, i, (um, u1), (x, v, a0), (xn, vn, an), h8);
         x = xn;
         v = vn;
         a0 = an;
         u0 = u1;
         i += 2;
     }
-    let mut steps = (i / 2) as u64;
-    rhs += 4 * steps;
-    if i + 1 < n {
-        let u1 = g * vals[i + 1];
-        (x, v) = step(d, x, v, a0, dt, 0.5 * (u0 + u1), u1);
-        if !(x.is_finite() && v.is_finite()) {
-            return Err(diverged(t0 + (i + 1) as f64 * dt, x, v));
-        }
-        steps += 1;
-        rhs += 3;
-        if dec.tick() {
-            sink(Sample {
-                index: i + 1,
-                t: t0 + (i + 1) as f64 * dt,
-                u: u1,
-                x,
-                v,
-            });
-            outputs += 1;
-        }
-    }
-    Ok(Summary {
-        samples: n,
-        outputs,
-        steps,
-        rejected_steps: 0,
-        rhs_evaluations: rhs,
-        events: 0,
-        samples_per_step: 2,
-        final_state: State { x, v },
-        final_time: t0 + (n - 1) as f64 * dt,
-    })
+    out.finish(d, vals, g, (i, u0), (x, v, a0), rhs, sink)
 }
 
 fn times1<S: Law, D: Law, F: FnMut(Sample)>(

@@ -411,6 +411,27 @@ impl Problem<'_> {
         self.s.len()
     }
 
+    /// Columns `n`, `n + 1` of the weighted least-squares matrix (real parts
+    /// in rows `0..ns`, imaginary parts in rows `ns..2ns`): the constant term
+    /// `d·w_k` and the proportional term `e·s_k·w_k`, when fitted.
+    fn fill_direct_terms(&self, a: &mut DMatrix<f64>, n: usize) {
+        let ns = self.ns();
+        let mut col = n;
+        if self.constant {
+            for k in 0..ns {
+                a[(k, col)] = self.w[k];
+            }
+            col += 1;
+        }
+        if self.proportional {
+            for k in 0..ns {
+                let v = self.s[k] * self.w[k];
+                a[(k, col)] = v.re;
+                a[(ns + k, col)] = v.im;
+            }
+        }
+    }
+
     /// One pole relocation; returns the new poles (im >= 0 storage).
     fn relocate(
         &self,
@@ -433,20 +454,7 @@ impl Problem<'_> {
                 a[(ns + k, n1 + j)] = g.im;
             }
         }
-        let mut col = n;
-        if self.constant {
-            for k in 0..ns {
-                a[(k, col)] = self.w[k];
-            }
-            col += 1;
-        }
-        if self.proportional {
-            for k in 0..ns {
-                let v = self.s[k] * self.w[k];
-                a[(k, col)] = v.re;
-                a[(ns + k, col)] = v.im;
-            }
-        }
+        self.fill_direct_terms(&mut a, n);
         for k in 0..ns {
             let g = -self.f[k] * self.w[k];
             a[(k, n1 + n)] = g.re;
@@ -567,20 +575,7 @@ impl Problem<'_> {
                 a[(ns + k, j)] = v.im;
             }
         }
-        let mut col = n;
-        if self.constant {
-            for k in 0..ns {
-                a[(k, col)] = self.w[k];
-            }
-            col += 1;
-        }
-        if self.proportional {
-            for k in 0..ns {
-                let v = self.s[k] * self.w[k];
-                a[(k, col)] = v.re;
-                a[(ns + k, col)] = v.im;
-            }
-        }
+        self.fill_direct_terms(&mut a, n);
         for k in 0..ns {
             let v = self.f[k] * self.w[k];
             b[k] = v.re;

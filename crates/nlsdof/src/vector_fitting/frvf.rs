@@ -3,7 +3,7 @@
 //! ## Model
 //!
 //! ```text
-//! H(s) ≈ Σ_{n=1}^{N} r_n/(s − a_n) + d + s e                      (G&S 1999 Eq 1)
+//! H(s) ≈ Σ_{n=1}^{N} r_n/(s − a_n) + d + s e                      (Gustavsen & Semlyen 1999)
 //! ```
 //!
 //! Complex poles come in conjugate pairs `(a, ā)` with residues `(r, r̄)`;
@@ -20,20 +20,20 @@
 //! With the current poles `â_n` and an unknown weighting function
 //!
 //! ```text
-//! σ(s) = Σ_n c̃_n/(s − â_n) + d̃                                     (G&S 1999 Eq 2, relaxed: d̃ free)
+//! σ(s) = Σ_n c̃_n/(s − â_n) + d̃                                     (Gustavsen & Semlyen 1999, relaxed: d̃ free)
 //! ```
 //!
 //! the linearised problem `(σH)_fit(s_k) − σ(s_k) H(s_k) ≈ 0`, i.e.
 //!
 //! ```text
-//! Σ_n c_n φ_n(s_k) + d + s_k e − H_k (Σ_n c̃_n φ_n(s_k) + d̃) ≈ 0     (G&S 1999 Eq 4–5)
+//! Σ_n c_n φ_n(s_k) + d + s_k e − H_k (Σ_n c̃_n φ_n(s_k) + d̃) ≈ 0     (Gustavsen & Semlyen 1999)
 //! ```
 //!
 //! is solved for all unknowns by linear least squares, each equation
 //! multiplied by the weight `w_k`, real and imaginary parts stacked. The
 //! real basis of a complex pair is `φ' = 1/(s−a) + 1/(s−ā)`,
 //! `φ'' = j/(s−a) − j/(s−ā)` (coefficients `c = c' + j c''`), which keeps
-//! all unknowns real (G&S 1999, Appendix). The **fast** formulation
+//! all unknowns real (Gustavsen & Semlyen 1999). The **fast** formulation
 //! (Deschrijver et al. 2008) takes the QR factorisation `[A₁ A₂] = Q R` of
 //! the matrix of the `(c, d, e)` columns `A₁` and the `(c̃, d̃)` columns
 //! `A₂`; since the right-hand side is zero, `c̃, d̃` solve the small system
@@ -47,14 +47,14 @@
 //! the system re-solved. All least-squares problems are solved by
 //! Householder QR (nalgebra) with columns scaled to unit norm.
 //!
-//! The new poles are the zeros of `σ` (G&S 1999 Eq 8: `H = (σH)_fit/σ_fit`,
+//! The new poles are the zeros of `σ` (Gustavsen & Semlyen 1999: `H = (σH)_fit/σ_fit`,
 //! so the poles of `H` are the zeros of `σ`), the eigenvalues of
 //! `Â − b̂ c̃ᵀ/d̃` with `Â` the real block-diagonal realisation of the poles
 //! (`[â]` for a real pole with `b̂ = 1`; `[[a', a''], [−a'', a']]` with
 //! `b̂ = [2, 0]ᵀ` for a pair `a' + j a''`), computed by a bounded real Schur
 //! iteration. Unstable poles (`Re a > 0`) are flipped to `−|Re a| + j Im a`.
 //!
-//! Starting poles (G&S 1999 Eq 9): `a = −β/100 ± jβ`, `β` spread linearly
+//! Starting poles (Gustavsen & Semlyen 1999): `a = −β/100 ± jβ`, `β` spread linearly
 //! (or logarithmically) over the band; the damping fraction `1/100` is
 //! [`VfOptions::starting_damping`].
 //!

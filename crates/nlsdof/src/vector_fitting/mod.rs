@@ -10,7 +10,7 @@
 //!   Macromodeling*, ch. 7). The model is the pole–residue form
 //!
 //!   ```text
-//!   H(s) ≈ Σ_n r_n / (s − a_n) + d + s e,     s = jω              (G&S 1999 Eq 1)
+//!   H(s) ≈ Σ_n r_n / (s − a_n) + d + s e,     s = jω              (Gustavsen & Semlyen 1999)
 //!   ```
 //!
 //!   with complex poles in conjugate pairs, so that `H(−jω) = conj H(jω)`

@@ -245,6 +245,7 @@ fn tick_label(v: f64, span: f64) -> String {
 
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
+    crate::fonts::register();
     let mut level_lines: Vec<Vec<Polyline>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {

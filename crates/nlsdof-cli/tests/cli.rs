@@ -2,42 +2,11 @@
 //! `equiv`, `roots`, `frf`, the SVG plot, and the error contract (exit code
 //! 2, exactly one stderr line, no output file).
 
-use assert_cmd::Command;
+mod common;
+use common::{example, fails, json, ok, write};
+
 use serde_json::Value;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
-
-fn nlsdof() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_nlsdof"))
-}
-
-fn example(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-}
-
-/// Runs a command that must succeed; returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = nlsdof().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "nlsdof {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn json(args: &[&str]) -> Value {
-    let text = ok(args);
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
-}
-
-fn write_model(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
 
 // ---------------------------------------------------------------- equiv
 
@@ -83,7 +52,7 @@ fn equiv_text() {
 fn roots_linear_model_equals_receptance() {
     let dir = tempfile::tempdir().unwrap();
     let (m, k, c) = (2.0_f64, 800.0_f64, 1.5_f64);
-    let model = write_model(
+    let model = write(
         dir.path(),
         "linear.toml",
         &format!("mass = {m:?}\nstiffness = {k:?}\ndamping = {c:?}\n"),
@@ -506,51 +475,23 @@ fn help_teaches_model_units_and_examples() {
 
 // ---------------------------------------------------------------- errors
 
-/// Expects exit code 2, exactly one stderr line `nlsdof: error: ...`
-/// containing `want`, nothing on stdout, and `out_dir` left empty.
-fn fails(args: &[&str], want: &str, out_dir: &Path) {
-    let out = nlsdof().args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "nlsdof {args:?}: stderr {stderr}"
-    );
-    assert_eq!(
-        stderr.lines().count(),
-        1,
-        "nlsdof {args:?}: stderr not one line:\n{stderr}"
-    );
-    assert!(stderr.starts_with("nlsdof: error: "), "{stderr}");
-    assert!(
-        stderr.contains(want),
-        "nlsdof {args:?}: stderr {stderr:?} lacks {want:?}"
-    );
-    assert!(out.stdout.is_empty(), "nlsdof {args:?}: stdout not empty");
-    let left: Vec<_> = std::fs::read_dir(out_dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert!(left.is_empty(), "nlsdof {args:?} left files {left:?}");
-}
-
 #[test]
 fn errors_are_one_line_exit_2_and_leave_no_file() {
     let models = tempfile::tempdir().unwrap();
     let outs = tempfile::tempdir().unwrap();
     let good = example("duffing-strong.toml");
     let good = good.to_str().unwrap();
-    let bad_toml = write_model(
+    let bad_toml = write(
         models.path(),
         "bad.toml",
         "mass = 1.0\nstiffness = [1.0\ndamping = 0.0\n",
     );
-    let neg_mass = write_model(
+    let neg_mass = write(
         models.path(),
         "neg.toml",
         "mass = -1.0\nstiffness = 1.0\ndamping = 0.0\n",
     );
-    let low_exp = write_model(
+    let low_exp = write(
         models.path(),
         "exp.toml",
         "mass = 1.0\nstiffness = 1.0\ndamping = 0.0\n[nonlinear_stiffness]\ncoefficient = 1.0\nexponent = -3.5\n",

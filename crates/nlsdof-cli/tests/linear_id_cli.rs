@@ -4,39 +4,11 @@
 //! contract, and the clamped-beam impact tests against the stepped-sine
 //! peaks of the same beam.
 
-use assert_cmd::Command;
-use serde_json::Value;
+mod common;
+use common::{fails_one_line as fails, json, ok};
+
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-
-fn nlsdof() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_nlsdof"))
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = nlsdof().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "nlsdof {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn json(args: &[&str]) -> Value {
-    let text = ok(args);
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
-}
-
-/// Runs a command that must fail: exit code 2, exactly one stderr line.
-fn fails(args: &[&str]) -> String {
-    let out = nlsdof().args(args).output().unwrap();
-    assert_eq!(out.status.code(), Some(2), "nlsdof {args:?} should fail");
-    let err = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(err.lines().count(), 1, "one stderr line: {err}");
-    assert!(err.starts_with("nlsdof: error: "), "{err}");
-    err
-}
 
 const M: f64 = 0.26699;
 const K: f64 = 306.7878;

@@ -3,62 +3,12 @@
 //! error contract (exit code 2, one stderr line naming the offending value,
 //! no output file) and Ctrl-C leaving no partial file.
 
-use assert_cmd::Command;
+mod common;
+use common::{fails, ok, write};
+
 use serde_json::Value;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
-
-fn nlsdof() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_nlsdof"))
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = nlsdof().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "nlsdof {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Runs a command that must fail with exit code 2, one stderr line
-/// containing `want`, and no file at `out` (nor any temporary) afterwards.
-fn fails(args: &[&str], want: &str, out: &Path) {
-    let before: Vec<_> = std::fs::read_dir(out.parent().unwrap())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    let o = nlsdof().args(args).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "nlsdof {args:?}: expected exit 2, got {:?}; stderr: {err}",
-        o.status.code()
-    );
-    assert_eq!(
-        err.trim_end().lines().count(),
-        1,
-        "expected one stderr line, got: {err}"
-    );
-    assert!(
-        err.contains(want),
-        "stderr {err:?} does not mention {want:?}"
-    );
-    assert!(!out.exists(), "output file {} was written", out.display());
-    let after: Vec<_> = std::fs::read_dir(out.parent().unwrap())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(before, after, "files left behind");
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
 
 /// Linear model: m = 1 kg, k = (2π·2 Hz)² N/m, c = 0.4 N s/m.
 fn linear_model(dir: &Path) -> PathBuf {

@@ -569,6 +569,7 @@ fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
 /// SVG: |H| (log) and phase vs frequency, measured points and fitted curve;
 /// Nyquist plot of the mobility with the fitted model and the circle fit.
 fn render(id: &Identified, omega: &[f64], output: OutputKind) -> Result<String, CliError> {
+    crate::fonts::register();
     let blue = RGBColor(31, 119, 180);
     let red = RGBColor(214, 39, 40);
     let green = RGBColor(44, 160, 44);

@@ -3,7 +3,9 @@
 
 mod cmd;
 mod error;
+mod fonts;
 mod plot;
+mod png;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -52,6 +54,7 @@ enum Command {
 }
 
 fn main() {
+    fonts::register();
     ctrlc::set_handler(|| {
         nlsdof_io::atomic::cleanup_all();
         eprintln!("nlsdof: interrupted; no output written");

@@ -194,13 +194,17 @@ fn compare_tabulates_models() {
 
 /// The clamped-clamped beam (real data, up-sweeps, 6 levels 0.04–0.14 g):
 /// Duffing with a free forcing gain, fitted to every 4th step (256 per
-/// level, for test speed). Prints predicted vs measured jump-down
-/// frequencies. NOTE: the issue asks for all jumps within 2 %; the measured
-/// jumps (148.1, 163.3, 182.6, 188.9, 209.8, 212.9 Hz) are not a smooth
-/// function of the level (the real up-sweeps fall off the upper branch
-/// early at 0.10 g and 0.14 g), and no fit found so far meets 2 % at every
-/// level; this test asserts the bound the fit does meet (see the report in
-/// docs/identification.md).
+/// level, for test speed) with the jump-frequency residuals
+/// (`fit_with_jumps`, λ = 100). Prints predicted vs measured jump-down
+/// frequencies. NOTE: the issue asks for all jumps within 2 %; this is NOT
+/// met. The measured jumps (148.1, 163.3, 182.6, 188.9, 209.8, 212.9 Hz)
+/// alternate around any smooth trend (the real up-sweeps fall off the upper
+/// branch early at 0.10 g and 0.14 g), and every first-order HB model tried
+/// (Duffing, generalised stiffness, duffing-generalised, generalised; free
+/// gain; λ from 30 to 10⁴; wider bounds) ends at a worst level error of
+/// 2.2–2.8 %, and a minimax (Lawson) fit of the jump errors alone still
+/// equioscillates at 2.14–2.19 % (docs/identification.md). This test
+/// asserts the 2.5 % this fit meets (before the jump residuals: 9.05 %).
 #[test]
 fn clamped_beam_duffing_fit_predicts_jumps() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -230,13 +234,14 @@ fn clamped_beam_duffing_fit_predicts_jumps() {
     let mut spec = FitSpec::new(ModelKind::Duffing, &data);
     spec.free("gain").unwrap();
     let t0 = std::time::Instant::now();
-    let res = fit(
+    let res = fit_with_jumps(
         &data,
         &spec,
         &FitOptions {
             starts: 1,
             ..FitOptions::default()
         },
+        100.0,
         &|| {},
     )
     .unwrap();
@@ -255,5 +260,5 @@ fn clamped_beam_duffing_fit_predicts_jumps() {
         worst = worst.max(d.abs());
         eprintln!("| {} | {meas:.2} | {pred:.2} | {d:+.2} |", c.level);
     }
-    assert!(worst < 10.0, "worst jump-frequency error {worst:.2} %");
+    assert!(worst < 2.5, "worst jump-frequency error {worst:.2} %");
 }

@@ -3,9 +3,10 @@
 //! uncommitted `AtomicFile` (error, panic) removes the temporary, so no
 //! partial output is ever visible under the target name.
 //!
-//! For Ctrl-C, call [`register_cleanup`] once at start-up: it remembers every
-//! live temporary and [`cleanup_all`] (called from the signal handler)
-//! removes them.
+//! Every live temporary is remembered, and [`cleanup_all`] (called from the
+//! Ctrl-C handler) removes them. A whole output folder built as a hidden
+//! staging folder and renamed when complete (`nlsdof demo`) is registered
+//! with [`register_partial_dir`] so that Ctrl-C removes it too.
 
 use crate::error::IoError;
 use std::fs::File;
@@ -14,14 +15,31 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+static LIVE_DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Removes every temporary file still registered (for a Ctrl-C handler).
+/// Removes every temporary file and staging folder still registered (for a
+/// Ctrl-C handler).
 pub fn cleanup_all() {
     if let Ok(live) = LIVE.lock() {
         for p in live.iter() {
             let _ = std::fs::remove_file(p);
         }
     }
+    if let Ok(live) = LIVE_DIRS.lock() {
+        for p in live.iter() {
+            let _ = std::fs::remove_dir_all(p);
+        }
+    }
+}
+
+/// Remembers a staging folder (incomplete output) for [`cleanup_all`].
+pub fn register_partial_dir(dir: &Path) {
+    LIVE_DIRS.lock().map(|mut l| l.push(dir.to_path_buf())).ok();
+}
+
+/// Forgets a staging folder: it was renamed to its final name or removed.
+pub fn unregister_partial_dir(dir: &Path) {
+    LIVE_DIRS.lock().map(|mut l| l.retain(|p| p != dir)).ok();
 }
 
 /// A file being written; invisible under its final name until committed.

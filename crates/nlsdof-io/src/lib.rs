@@ -10,11 +10,14 @@
 //! * [`frf_file`] — FRF tables (CSV `f_hz,re,im` or `f_hz,mag[,phase_deg]`),
 //!   multi-channel time histories (CSV, Polytec ASCII exports) and Polytec
 //!   swept-sine FRF exports, for linear identification.
+//! * [`phase_resonance_data`] — phase-resonance points (`gamma,f_hz,amplitude`
+//!   at 90° phase per level) for `nlsdof fit --phase-resonance`.
 
 pub mod atomic;
 pub mod error;
 pub mod frf_file;
 pub mod model_file;
+pub mod phase_resonance_data;
 pub mod signal_file;
 pub mod stepped_sine_data;
 

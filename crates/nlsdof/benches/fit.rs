@@ -1,6 +1,8 @@
 //! Identification speed: local fit of the generalised model to 5 levels ×
 //! 200 steps (target ≤ 20 ms) and a 256-start global search (target ≤ 2 s
-//! on 2 cores). Synthetic noise-free data from the exact harmonic balance.
+//! on 2 cores; GlobalSearch-style: 256 trial points scored, local runs from
+//! the best, see `identification::global`). Synthetic noise-free data from
+//! the exact harmonic balance. Figures: docs/identification.md, "Speed".
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nlsdof::identification::models::*;

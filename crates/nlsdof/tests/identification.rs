@@ -253,9 +253,8 @@ fn noise_free_recovery_with_free_gain_and_global_search() {
     // gain and damping separately identifiable from height and width
     let mut th = truth(ModelKind::Duffing);
     th[GAIN] = 1.5;
-    // up-sweeps only: a down-sweep starting where several stable states
-    // coexist makes the sweep integrate the slow flow from rest, which is
-    // slow for the extreme parameter sets of a global search
+    // up-sweeps (multistable first steps of down-sweeps are covered by
+    // `multistable_first_step_is_selected_by_the_measured_amplitude`)
     let data = synthetic(&th, &[0.1, 0.25, 0.4], 8.0, 13.0, 25, false);
     let mut spec = FitSpec::new(ModelKind::Duffing, &data);
     spec.free("gain").unwrap();
@@ -412,4 +411,240 @@ fn bad_data_gives_typed_errors() {
         spec.fix("kappa", 1.0),
         Err(SpecError::NotInModel { .. })
     ));
+}
+
+/// Down-sweeps whose first step (the highest frequency) lies inside the
+/// hysteresis window of the strongest level, measured on the upper branch
+/// (the run continued from an up-sweep): the objective starts the model on
+/// the stable state nearest to the measured first amplitude (sweep rule 1′),
+/// so the fit needs no slow-flow integration and recovers the parameters.
+#[test]
+fn multistable_first_step_is_selected_by_the_measured_amplitude() {
+    let th = truth(ModelKind::Duffing);
+    let gammas = [0.15, 0.5, 1.0];
+    let model = normalised_model(&th);
+    let resp = |g: f64| {
+        ForcedResponse::from_normalised(&model, th[GAIN] * g, Formulation::HarmonicBalance).unwrap()
+    };
+    // the hysteresis window of the strongest level; the sweep starts inside
+    let top = resp(gammas[2]);
+    let folds = top.folds(TWO_PI * 8.0, TWO_PI * 40.0).unwrap();
+    assert_eq!(folds.len(), 2, "{folds:?}");
+    let (w_lo, w_hi) = (
+        TWO_PI * 8.0,
+        folds[1].omega - 0.25 * (folds[1].omega - folds[0].omega),
+    );
+    let omegas: Vec<f64> = (0..40)
+        .map(|i| w_lo + (w_hi - w_lo) * i as f64 / 39.0)
+        .collect();
+    let first = top.steady_states(w_hi).unwrap();
+    let stable: Vec<f64> = first
+        .roots
+        .iter()
+        .filter(|s| s.stable)
+        .map(|s| s.amplitude)
+        .collect();
+    assert_eq!(stable.len(), 2, "two stable states at the first step");
+    let mut recs = Vec::new();
+    for (l, &g) in gammas.iter().enumerate() {
+        let r = resp(g);
+        // the rig was on the largest stable state at the first step
+        let a0 = r
+            .steady_states(w_hi)
+            .unwrap()
+            .roots
+            .iter()
+            .filter(|s| s.stable)
+            .map(|s| s.amplitude)
+            .fold(0.0, f64::max);
+        let sw = r.sweep_from(&omegas, SweepDirection::Down, a0).unwrap();
+        assert!(sw.points[0].amplitude == a0);
+        for p in &sw.points {
+            recs.push(Record {
+                level: format!("L{l}"),
+                gamma: g,
+                omega: p.omega,
+                amplitude: p.amplitude,
+                phase: None,
+                direction: SweepDirection::Down,
+                weight: 1.0,
+            });
+        }
+    }
+    let data = Dataset::from_records(&recs).unwrap();
+    // the top level's model curve starts on the upper branch, and differs
+    // from the sweep from rest (which takes the lower one)
+    let amps = model_amplitudes(&data, &th).unwrap();
+    let c = &data.curves[2];
+    assert_eq!(amps[2], c.amplitudes);
+    assert!(matches!(
+        top.sweep_from(&omegas, SweepDirection::Down, -1e-3),
+        Err(nlsdof::SolveError::Parameter(nlsdof::ParameterError::Negative { value, .. })) if value == -1e-3
+    ));
+    let from_rest = top.sweep(&omegas, SweepDirection::Down).unwrap();
+    assert!((from_rest.points[0].amplitude - stable[0]).abs() <= 1e-12 * stable[0]);
+    eprintln!("first-step stable states {stable:?}, folds {folds:?}");
+    assert!(stable[1] > 2.0 * stable[0]);
+    let mut spec = FitSpec::new(ModelKind::Duffing, &data);
+    // a local fit from near the truth (the jumps of the down-sweeps make the
+    // objective discontinuous, so the basin of the local solver is small)
+    let mut start = th;
+    start[ALPHA] *= 1.001;
+    start[DELTA] *= 1.01;
+    start[BETA] *= 1.01;
+    spec.start = start;
+    let res = fit(&data, &spec, &FitOptions::default(), &|| {}).unwrap();
+    for j in spec.free_indices() {
+        assert!(
+            rel(res.theta[j], th[j]) < 1e-8,
+            "{}: {} vs {} ({})",
+            PARAM_NAMES[j],
+            res.theta[j],
+            th[j],
+            res.termination
+        );
+    }
+}
+
+#[test]
+fn quadrature_frequency_derivatives_match_finite_differences() {
+    use nlsdof::identification::jumps::quadrature_frequency;
+    let mut rng = SplitMix64(19);
+    let mut checked = 0;
+    for _ in 0..30 {
+        let th = [
+            (TWO_PI * (5.0 + 20.0 * rng.next_f64())).powi(2),
+            0.5 + 3.0 * rng.next_f64(),
+            1e3 * (0.1 + rng.next_f64()) * 10f64.powf(3.0 * rng.next_f64()),
+            0.5 + 4.0 * rng.next_f64(),
+            0.05 + rng.next_f64(),
+            -0.8 + 3.0 * rng.next_f64(),
+            0.5 + rng.next_f64(),
+        ];
+        let gamma = 0.2 + 3.0 * rng.next_f64();
+        let Some((w0, d)) = quadrature_frequency(&th, gamma).unwrap() else {
+            continue;
+        };
+        // independent check of the point itself: phase lag 90° there
+        let r = ForcedResponse::from_normalised(
+            &normalised_model(&th),
+            th[GAIN] * gamma,
+            Formulation::HarmonicBalance,
+        )
+        .unwrap();
+        let set = r.steady_states(w0).unwrap();
+        assert!(
+            set.roots
+                .iter()
+                .any(|s| (s.phase - std::f64::consts::FRAC_PI_2).abs() < 1e-8),
+            "{set:?}"
+        );
+        for j in 0..N_PARAMS {
+            let h = 1e-6 * th[j].abs().max(1e-3);
+            let (mut tp, mut tm) = (th, th);
+            tp[j] += h;
+            tm[j] -= h;
+            let wp = quadrature_frequency(&tp, gamma).unwrap().unwrap().0;
+            let wm = quadrature_frequency(&tm, gamma).unwrap().unwrap().0;
+            let fd = (wp - wm) / (2.0 * h);
+            let scale = d[j].abs().max(fd.abs());
+            let floor = 1e-8 * w0 / th[j].abs().max(1.0);
+            assert!(
+                (fd - d[j]).abs() <= 1e-5 * scale + floor,
+                "dΩ_pq/d{} at {th:?}: analytic {} vs fd {fd}",
+                PARAM_NAMES[j],
+                d[j]
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "only {checked} derivatives checked");
+}
+
+#[test]
+fn jump_weighted_problem_jacobian_matches_finite_differences() {
+    use nlsdof::identification::jumps::WithJumps;
+    // hardening data with jumps at the upper levels (up-sweeps)
+    let mut th = truth(ModelKind::DuffingGeneralised);
+    th[GAIN] = 1.2;
+    let data = synthetic(&th, &[0.2, 0.5, 1.0], 8.0, 14.0, 30, false);
+    let mut spec = FitSpec::new(ModelKind::DuffingGeneralised, &data);
+    spec.free("gain").unwrap();
+    let p = WithJumps::new(Problem::new(&data, &spec).unwrap(), 3.0);
+    assert!(
+        !p.targets.is_empty(),
+        "no measured jumps in the synthetic data"
+    );
+    let u = p.problem.u_of(&th);
+    let (r, j) = p.residuals_and_jacobian(&u).unwrap();
+    let n = u.len();
+    let m0 = data.len();
+    assert_eq!(r.len(), m0 + p.targets.len());
+    for k in 0..n {
+        let h = 1e-6 * (1.0 + u[k].abs());
+        let (mut up, mut um) = (u.clone(), u.clone());
+        up[k] += h;
+        um[k] -= h;
+        let (rp, rm) = (p.residuals(&up).unwrap(), p.residuals(&um).unwrap());
+        // the jump rows (Eq 31 rows are checked by the test above)
+        for i in m0..r.len() {
+            let fd = (rp[i] - rm[i]) / (2.0 * h);
+            let an = j[i * n + k];
+            assert!(
+                (fd - an).abs() <= 1e-5 * an.abs().max(fd.abs()) + 1e-9 * r[i].abs().max(1e-6),
+                "u[{k}] jump residual {}: analytic {an} vs fd {fd}",
+                i - m0
+            );
+        }
+    }
+}
+
+/// The GlobalSearch stages (scoring, score threshold, basin filter, batches)
+/// give the same minima list on 1 and 2 threads, and the best minimum is the
+/// truth.
+#[test]
+fn global_search_stages_are_deterministic_across_thread_counts() {
+    let mut th = truth(ModelKind::Duffing);
+    th[GAIN] = 1.5;
+    let data = synthetic(&th, &[0.1, 0.25, 0.4], 8.0, 13.0, 25, false);
+    let mut spec = FitSpec::new(ModelKind::Duffing, &data);
+    spec.free("gain").unwrap();
+    let opts = FitOptions {
+        starts: 48,
+        seed: 5,
+        ..FitOptions::default()
+    };
+    let count = std::sync::atomic::AtomicUsize::new(0);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                fit(&data, &spec, &opts, &|| {
+                    count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                })
+                .unwrap()
+            })
+    };
+    let r1 = run(1);
+    // progress is reported once per trial point
+    assert_eq!(
+        count.load(std::sync::atomic::Ordering::Relaxed),
+        opts.starts
+    );
+    let r2 = run(2);
+    assert_eq!(r1.theta, r2.theta);
+    assert_eq!(r1.minima, r2.minima);
+    let runs: usize = r1.minima.iter().map(|m| m.count).sum();
+    assert!(
+        runs <= global::local_run_budget(opts.starts),
+        "{runs} local runs"
+    );
+    for m in &r1.minima {
+        eprintln!("{:e} {} {} {:?}", m.cost, m.count, m.termination, m.theta);
+    }
+    for j in spec.free_indices() {
+        assert!(rel(r1.theta[j], th[j]) < 1e-8, "{}", PARAM_NAMES[j]);
+    }
 }

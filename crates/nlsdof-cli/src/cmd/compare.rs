@@ -2,9 +2,9 @@
 //! RMS, AIC/BIC and parameters (paper Tables 5–7) and the phase-quadrature
 //! comparison (Table 8).
 
-use super::fit::{parse_model_kind, pq_text, progress_bar, result_json, DataArgs};
+use super::fit::{parse_model_kind, pq_text, result_json, DataArgs};
 use crate::error::CliError;
-use nlsdof::identification::{fit, FitOptions, FitSpec, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof::identification::{FitOptions, FitSpec, Status, N_PARAMS, PARAM_NAMES};
 use serde_json::json;
 use std::fmt::Write as _;
 
@@ -34,9 +34,15 @@ pub struct Args {
     pub mass: Option<f64>,
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub pr: super::phase_resonance::PrArgs,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    if args.pr.phase_resonance {
+        return super::phase_resonance::run_compare_args(&args);
+    }
+    let sign = args.pr.sign.resolve(args.pr.softening)?;
     let data = args.data.load()?;
     let kinds = args
         .models
@@ -61,20 +67,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let mut results = Vec::new();
     for kind in kinds {
-        let mut spec = FitSpec::new(kind, &data);
-        if let Some(list) = &args.free {
-            for name in list.split(',').filter(|s| !s.trim().is_empty()) {
-                // a parameter a model does not have is simply not freed for it
-                match spec.free(name) {
-                    Ok(()) | Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
-                    Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
+        let configure = |spec: &mut FitSpec| -> Result<(), CliError> {
+            if let Some(list) = &args.free {
+                for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+                    // a parameter a model does not have is simply not freed for it
+                    match spec.free(name) {
+                        Ok(()) | Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
+                        Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
+                    }
                 }
             }
-        }
-        let pb = progress_bar(opts.starts, kind.name());
-        let r = fit(&data, &spec, &opts, &|| pb.inc(1));
-        pb.finish_and_clear();
-        results.push(r.map_err(|e| CliError::Usage(format!("{kind}: {e}")))?);
+            Ok(())
+        };
+        let (r, _) = super::phase_resonance::fit_sweep_signed(&data, kind, sign, &configure, &opts)
+            .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
+        results.push(r);
     }
     if args.json {
         let v: Vec<_> = results

@@ -52,8 +52,21 @@ pub struct DataArgs {
 
 impl DataArgs {
     pub fn load(&self) -> Result<Dataset, CliError> {
-        let err =
-            |e: nlsdof_io::stepped_sine_data::SteppedSineDataError| CliError::Usage(e.to_string());
+        let err = |e: nlsdof_io::stepped_sine_data::SteppedSineDataError| {
+            use nlsdof_io::stepped_sine_data::SteppedSineDataError as E;
+            // one point per level looks like phase-resonance data
+            let hint = match &e {
+                E::MissingColumn {
+                    column: "level", ..
+                }
+                | E::Data {
+                    source: nlsdof::identification::DataError::TooFewFrequencies { count: 1, .. },
+                    ..
+                } => " (phase-resonance points, one row per level? add --phase-resonance)",
+                _ => "",
+            };
+            CliError::Usage(format!("{e}{hint}"))
+        };
         if let Some(dir) = &self.beam_dir {
             let runs = match self.runs {
                 RunsArg::Up => Runs::Up,
@@ -126,6 +139,8 @@ pub struct Args {
     /// JSON output.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub pr: super::phase_resonance::PrArgs,
 }
 
 /// Minimal SVG: measured amplitudes (dots) and the model's branch-following
@@ -242,7 +257,18 @@ DEFAULT BOUNDS (derived from the data): alpha in [(Omega_min/2)^2, (1.5 Omega_ma
 in [1e-6, 2] x alpha0; kappa_ref = g(eta) kappa (Omega_ref A_ref)^eta in [1e-6, 1e2] x delta0; \
 rho in [0, 10]; eta in [-1, 8]; gain in [0.1, 10]. A_ref is the largest measured amplitude, \
 Omega_ref its frequency. --bounds FILE overrides: lines `alpha = [min, max]`.\n\n\
-Nonlinear stiffness is fitted as hardening (beta > 0)."
+NONLINEAR STIFFNESS SIGN: hardening (beta > 0) by default; --softening (or --sign softening) fits \
+beta < 0 (bounds then apply to |beta_ref|, whose upper default is 0.95 alpha0); --sign auto fits both \
+and keeps the lower cost (both costs reported).\n\n\
+PHASE-RESONANCE DATA (--phase-resonance): DATA is a CSV gamma,f_hz,amplitude[,level][,weight], one row \
+per level: the frequency and amplitude where the phase lag is 90 deg. Not auto-detected: without the \
+flag DATA is read as sweeps. Residuals per level: (a_model - a_meas)/gamma and \
+W (f_model - f_meas)/f_meas, W = w_f * RMS(a_meas/gamma) / zeta0 (--frequency-weight w_f, default 1; \
+zeta0 = gamma/(2 a Omega^2) of the lowest level: a relative error e of the measured response moves the \
+amplitude by ~e and the 90 deg frequency by ~zeta e); the \
+model point is the 90 deg point of the harmonic balance. Parameters that these points cannot separate \
+(e.g. gain with the free damping coefficients, more free stiffness or damping parameters than levels, \
+or a rank-deficient Jacobian at the optimum) are reported as an error naming them."
         .to_string()
 }
 
@@ -612,9 +638,28 @@ pub fn resolve_mass(
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    use super::phase_resonance::{fit_sweep_signed, sign_trials_json, sign_trials_text, SignArg};
+    let sign = args.pr.sign.resolve(args.pr.softening)?;
+    if args.pr.phase_resonance {
+        return super::phase_resonance::run_fit(&args, sign);
+    }
+    if sign == SignArg::Auto && args.integer {
+        return Err(CliError::Usage(
+            "--sign auto is not available with --integer: choose --sign hardening or softening"
+                .into(),
+        ));
+    }
     let data = args.data.load()?;
     let kind = parse_model_kind(&args.model)?;
-    let mut spec = FitSpec::new(kind, &data);
+    let mut spec = FitSpec::new_signed(
+        kind,
+        &data,
+        if sign == SignArg::Softening {
+            nlsdof::identification::Sign::Softening
+        } else {
+            nlsdof::identification::Sign::Hardening
+        },
+    );
     if let Some(b) = &args.bounds {
         apply_bounds(&mut spec, b)?;
     }
@@ -632,6 +677,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ..FitOptions::default()
     };
     let mut integer_table = Vec::new();
+    let mut sign_trials = Vec::new();
     let res = if args.integer {
         if spec.status[RHO] != Status::Free
             && spec.status[nlsdof::identification::models::ETA] != Status::Free
@@ -658,6 +704,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         best.ok_or_else(|| {
             CliError::Usage("--integer: no integer exponent pair could be fitted".into())
         })?
+    } else if sign == SignArg::Auto {
+        let configure = |s: &mut FitSpec| -> Result<(), CliError> {
+            if let Some(b) = &args.bounds {
+                apply_bounds(s, b)?;
+            }
+            apply_fix_free(s, args.fix.as_deref(), args.free.as_deref())?;
+            Ok(())
+        };
+        let (r, t) = fit_sweep_signed(&data, kind, sign, &configure, &opts)?;
+        sign_trials = t;
+        r
     } else {
         let pb = progress_bar(opts.starts, kind.name());
         let r = fit(&data, &spec, &opts, &|| pb.inc(1));
@@ -683,12 +740,30 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if args.json {
         let mut v = result_json(&data, &res, mass)?;
+        if res.status[BETA] != Status::Absent {
+            v["stiffness_sign"] = json!(if res.theta[BETA] < 0.0 {
+                "softening"
+            } else {
+                "hardening"
+            });
+        }
+        if let Some(t) = sign_trials_json(&sign_trials) {
+            v["sign_auto"] = t;
+        }
         if args.integer {
             v["integer_pairs"] = Value::Array(integer_table);
         }
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
-        let mut s = result_text(&data, &res, mass)?;
+        let mut s = sign_trials_text(
+            &sign_trials,
+            if res.theta[BETA] < 0.0 {
+                nlsdof::identification::Sign::Softening
+            } else {
+                nlsdof::identification::Sign::Hardening
+            },
+        );
+        s.push_str(&result_text(&data, &res, mass)?);
         if args.integer {
             s.push_str("\ninteger exponent pairs (rho, eta): cost\n");
             for r in &integer_table {

@@ -16,14 +16,23 @@
 //! a local extremum of `ln P` — or, where no extremum exists at the cell
 //! ends, the slope of `ln P` at an inflection point — is closer to zero
 //! than 4× its change across the cell (refined 4-fold, up to 6 times:
-//! 1/4096 of a cell).
+//! 1/4096 of a cell). The refinement of one search is capped at
+//! [`REFINE_BUDGET`] extra samples, taken in increasing frequency: at
+//! extreme parameters (a response curve that is nearly vertical over a wide
+//! band, so that critical values stay near zero everywhere) the heuristic
+//! would otherwise refine almost every cell to full depth — thousands of
+//! root isolations per sweep for no fold.
 
 use super::*;
 
 /// Cells of the coarse fold-search grid over the requested frequency range.
 pub const GRID: usize = 256;
 const MAX_REFINE_DEPTH: u32 = 6;
+/// Most extra samples the double-crossing refinement may take in one fold
+/// search (4 per refined cell); deterministic, so results stay reproducible.
+pub const REFINE_BUDGET: usize = 2 * GRID;
 
+#[derive(Clone)]
 struct Sample {
     omega: f64,
     count: usize,
@@ -78,14 +87,16 @@ fn locate(
     a: &Sample,
     b: &Sample,
     depth: u32,
+    budget: &mut usize,
     out: &mut Vec<Fold>,
 ) -> Result<(), SolveError> {
     if a.count == b.count {
-        if depth >= MAX_REFINE_DEPTH || !suspicious(a, b) {
+        if depth >= MAX_REFINE_DEPTH || *budget < 4 || !suspicious(a, b) {
             return Ok(());
         }
+        *budget -= 4;
         // refine: 4 sub-cells
-        let mut prev = sample(r, a.omega)?;
+        let mut prev = a.clone();
         for k in 1..=4 {
             let w = if k == 4 {
                 b.omega
@@ -93,7 +104,7 @@ fn locate(
                 a.omega * (b.omega / a.omega).powf(k as f64 / 4.0)
             };
             let s = sample(r, w)?;
-            locate(r, &prev, &s, depth + 1, out)?;
+            locate(r, &prev, &s, depth + 1, budget, out)?;
             prev = s;
         }
         return Ok(());
@@ -121,8 +132,8 @@ fn locate(
             let s_lo = sample(r, lo)?;
             let s_mid = sample(r, mid)?;
             let s_hi = sample(r, hi)?;
-            locate(r, &s_lo, &s_mid, depth, out)?;
-            locate(r, &s_mid, &s_hi, depth, out)?;
+            locate(r, &s_lo, &s_mid, depth, budget, out)?;
+            locate(r, &s_mid, &s_hi, depth, budget, out)?;
             return Ok(());
         }
     }
@@ -164,6 +175,7 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
     // skip them (no root isolation needed there).
     let fast = super::sweep::fast_path_possible(r);
     let eqs: Vec<_> = grid.iter().map(|&w| r.equation(w)).collect();
+    let mut budget = REFINE_BUDGET;
     let mut prev: Option<Sample> = None;
     for i in 1..=GRID {
         if fast && super::sweep::certify_cell(&eqs[i - 1], &eqs[i]) {
@@ -175,7 +187,7 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
             None => sample(r, grid[i - 1])?,
         };
         let b = sample(r, grid[i])?;
-        locate(r, &a, &b, 0, &mut out)?;
+        locate(r, &a, &b, 0, &mut budget, &mut out)?;
         prev = Some(b);
     }
     out.sort_by(|a, b| a.omega.total_cmp(&b.omega));

@@ -332,7 +332,23 @@ impl ForcedResponse {
     /// (rad/s), in `direction` (for `Down` the points are returned in sweep
     /// order, i.e. decreasing frequency). See [`sweep`](self) for the rules.
     pub fn sweep(&self, omegas: &[f64], direction: SweepDirection) -> Result<Sweep, SolveError> {
-        sweep::sweep(self, omegas, direction)
+        sweep::sweep(self, omegas, direction, None)
+    }
+
+    /// As [`ForcedResponse::sweep`], but the state at the first step (in
+    /// sweep order) is the stable steady state whose amplitude is nearest
+    /// to `initial_amplitude` (m, compared in `ln a`) instead of the one
+    /// reached from rest (sweep rule 1′). Used when the first state is
+    /// known, e.g. measured: where several stable states coexist at the
+    /// first frequency, the measurement tells which one the structure was
+    /// on. Identical to `sweep` where the first step has one stable state.
+    pub fn sweep_from(
+        &self,
+        omegas: &[f64],
+        direction: SweepDirection,
+        initial_amplitude: f64,
+    ) -> Result<Sweep, SolveError> {
+        sweep::sweep(self, omegas, direction, Some(initial_amplitude))
     }
 
     /// The point of the response curve where the phase lag is 90°

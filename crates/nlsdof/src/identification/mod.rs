@@ -15,15 +15,17 @@
 
 pub mod data;
 pub mod global;
+pub mod jumps;
 pub mod levenberg_marquardt;
 pub mod models;
 pub mod objective;
+pub mod phase_resonance;
 pub mod uncertainty;
 
 pub use data::{Curve, DataError, Dataset, Record};
 pub use levenberg_marquardt::{LmOptions, Termination};
 pub use models::{ModelKind, N_PARAMS, PARAM_NAMES};
-pub use objective::{FitSpec, SpecError, Status};
+pub use objective::{FitSpec, Sign, SpecError, Status};
 pub use uncertainty::Uncertainty;
 
 use crate::error::SolveError;
@@ -141,6 +143,30 @@ pub fn fit(
     opts: &FitOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<FitResult, FitError> {
+    fit_impl(data, spec, opts, None, progress)
+}
+
+/// As [`fit`], with the jump-frequency residuals of [`jumps`] (weight
+/// `jump_weight` = λ ≥ 0) added to Eq 31 for every up-sweep with a measured
+/// jump. The reported `cost`, RMS and uncertainty are those of Eq 31 alone
+/// at the optimum; the costs in `minima` include the jump terms.
+pub fn fit_with_jumps(
+    data: &Dataset,
+    spec: &FitSpec,
+    opts: &FitOptions,
+    jump_weight: f64,
+    progress: &(dyn Fn() + Sync),
+) -> Result<FitResult, FitError> {
+    fit_impl(data, spec, opts, Some(jump_weight.max(0.0)), progress)
+}
+
+fn fit_impl(
+    data: &Dataset,
+    spec: &FitSpec,
+    opts: &FitOptions,
+    jump_weight: Option<f64>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<FitResult, FitError> {
     let problem = Problem::new(data, spec)?;
     let (lo, hi) = problem.u_bounds();
     let u0 = problem.u_of(&spec.start);
@@ -154,16 +180,42 @@ pub fn fit(
             .sum();
         lm.cost_floor = 1e-28 * scale;
     }
-    let found = global::multistart(
-        &problem,
-        &u0,
-        &lo,
-        &hi,
-        opts.starts.max(1),
-        opts.seed,
-        &lm,
-        progress,
-    );
+    // stage-2 score threshold of the global search: half the cost of the
+    // zero model (global::multistart_below)
+    let zero_model_cost: f64 = data
+        .curves
+        .iter()
+        .flat_map(|c| {
+            c.amplitudes
+                .iter()
+                .zip(&c.weights)
+                .map(move |(a, w)| w * (a / c.gamma).powi(2))
+        })
+        .sum();
+    let found = match jump_weight {
+        None => global::multistart_below(
+            &problem,
+            &u0,
+            &lo,
+            &hi,
+            opts.starts.max(1),
+            opts.seed,
+            &lm,
+            0.5 * zero_model_cost,
+            progress,
+        ),
+        Some(w) => global::multistart_below(
+            &jumps::WithJumps::new(problem.clone(), w),
+            &u0,
+            &lo,
+            &hi,
+            opts.starts.max(1),
+            opts.seed,
+            &lm,
+            0.5 * zero_model_cost,
+            progress,
+        ),
+    };
     let best = found
         .first()
         .ok_or(FitError::NoStartEvaluable { model: spec.kind })?;
@@ -218,7 +270,9 @@ pub fn fit(
 }
 
 /// Predicted first jump of each curve's model sweep (rad/s), `None` where
-/// the model sweep does not jump.
+/// the model sweep does not jump. The sweep starts as in the objective
+/// (state nearest to the measured first amplitude, see
+/// [`objective::model_amplitudes`]).
 pub fn predicted_jumps(
     data: &Dataset,
     theta: &[f64; N_PARAMS],
@@ -232,10 +286,12 @@ pub fn predicted_jumps(
                 theta[models::GAIN] * c.gamma,
                 Formulation::HarmonicBalance,
             )?;
-            Ok(r.sweep(&c.omegas, c.direction)?
-                .jumps
-                .first()
-                .map(|j| j.omega))
+            Ok(
+                r.sweep_from(&c.omegas, c.direction, objective::first_amplitude(c))?
+                    .jumps
+                    .first()
+                    .map(|j| j.omega),
+            )
         })
         .collect()
 }

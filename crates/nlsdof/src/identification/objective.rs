@@ -42,7 +42,10 @@
 //! u_κ = ln κ_ref,  κ_ref = g(η) κ (Ω_ref A_ref)^η   (c_eq/m at A_ref, Ω_ref, 1/s)
 //! ```
 //!
-//! Consequence: nonlinear stiffness is hardening (β > 0) in the fit.
+//! The sign of β is not a variable: [`FitSpec::stiffness_sign`] chooses it
+//! (`s = +1` hardening, the default; `s = −1` softening) and
+//! `β = s · e^{u_β} / (g(ρ) A_ref^ρ)`, so `u_β = ln(s β_ref)` and the bounds
+//! of β_ref are bounds of its magnitude `|β_ref|`. `∂β/∂u_β = β` for either sign.
 
 use super::data::Dataset;
 use super::models::*;
@@ -83,6 +86,36 @@ pub struct FitSpec {
     /// Data-derived start, natural θ (β, κ as true coefficients).
     pub start: [f64; N_PARAMS],
     pub scales: Scales,
+    /// Sign of the fitted nonlinear stiffness β (when β is free).
+    pub stiffness_sign: Sign,
+}
+
+/// Sign of the nonlinear stiffness coefficient β in a fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Sign {
+    /// β > 0: the resonance bends to higher frequencies.
+    #[default]
+    Hardening,
+    /// β < 0: the resonance bends to lower frequencies (`k + k_eq(a)`
+    /// reaches zero at a finite amplitude: larger amplitudes escape).
+    Softening,
+}
+
+impl Sign {
+    /// `+1` or `−1`.
+    pub fn factor(self) -> f64 {
+        match self {
+            Sign::Hardening => 1.0,
+            Sign::Softening => -1.0,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Sign::Hardening => "hardening",
+            Sign::Softening => "softening",
+        }
+    }
 }
 
 /// Problem-specification errors.
@@ -223,7 +256,31 @@ impl FitSpec {
             bounds,
             start,
             scales,
+            stiffness_sign: Sign::Hardening,
         }
+    }
+
+    /// As [`FitSpec::new`] with the stiffness sign chosen. For
+    /// [`Sign::Softening`] the start is `β_ref,0 = −clamp(α₀ − Ω_peak,high², 0.01 α₀, 0.5 α₀)`
+    /// (the peak shift down to the highest level) and the upper bound of
+    /// `|β_ref|` is `0.95 α₀` (at `|β_ref| ≥ α` the backbone
+    /// `Ω² = α + g(ρ) β a^ρ` has no positive frequency at A_ref).
+    pub fn new_signed(kind: ModelKind, data: &Dataset, sign: Sign) -> Self {
+        let mut spec = Self::new(kind, data);
+        if sign == Sign::Softening {
+            spec.stiffness_sign = sign;
+            if spec.status[BETA] != Status::Absent {
+                let alpha0 = spec.start[ALPHA];
+                let high = &data.curves[lowest_curve(data, false)];
+                let wh = high.omegas[high.peak_index()];
+                let beta_ref0 = (alpha0 - wh * wh).clamp(0.01 * alpha0, 0.5 * alpha0);
+                spec.start[BETA] = -beta_ref0
+                    / (g_unchecked(spec.start[RHO]) * spec.scales.a_ref.powf(spec.start[RHO]));
+                let (lo, hi) = spec.bounds[BETA];
+                spec.bounds[BETA] = (lo, hi.min(0.95 * alpha0));
+            }
+        }
+        spec
     }
 
     /// Holds parameter `name` at `value` (natural units).
@@ -259,11 +316,11 @@ impl FitSpec {
                     why: "exponent must be > -3",
                 })
             }
-            BETA if value <= 0.0 => {
+            BETA if value == 0.0 => {
                 return Err(SpecError::BadFixedValue {
                     name: pname,
                     value,
-                    why: "must be > 0 (hardening; the fit does not support softening)",
+                    why: "must be non-zero (< 0 softening, > 0 hardening; use a model without nonlinear stiffness for 0)",
                 })
             }
             _ => {}
@@ -280,7 +337,8 @@ impl FitSpec {
         Ok(())
     }
 
-    /// Replaces the bounds of `name` (for β and κ: of β_ref and κ_ref).
+    /// Replaces the bounds of `name` (for β and κ: of β_ref and κ_ref; for
+    /// β with [`Sign::Softening`]: of |β_ref|).
     pub fn set_bounds(&mut self, name: &str, min: f64, max: f64) -> Result<(), SpecError> {
         let j = self.index(name)?;
         let pname = PARAM_NAMES[j];
@@ -397,56 +455,110 @@ pub fn amplitude_derivatives(
     omega: f64,
     a: f64,
 ) -> [f64; N_PARAMS] {
-    let (alpha, delta, beta, rho, kappa, eta, gain) = (
-        theta[ALPHA],
-        theta[DELTA],
-        theta[BETA],
-        theta[RHO],
-        theta[KAPPA],
-        theta[ETA],
-        theta[GAIN],
-    );
-    let w2 = omega * omega;
-    let la = a.ln();
-    let (gr, gbar) = if beta != 0.0 {
-        let gr = g_unchecked(rho);
-        (gr, gr * beta * (rho * la).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let lwa = (omega * a).ln();
-    let (ge, gkw) = if kappa != 0.0 {
-        let ge = g_unchecked(eta);
-        (ge, ge * kappa * (eta * lwa).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let s = alpha + gbar - w2;
-    let d = delta + gkw;
-    let fa = s * s + w2 * d * d + rho * s * gbar + eta * w2 * d * gkw;
-    let mut h = [0.0; N_PARAMS];
-    h[ALPHA] = s;
-    h[DELTA] = w2 * d;
-    if beta != 0.0 {
-        let ar = (rho * la).exp();
-        h[BETA] = s * gr * ar;
-        h[RHO] = s * beta * ar * (g_derivative(rho) + gr * la);
+    DerivativeConstants::new(theta).derivatives(gamma, omega, a)
+}
+
+/// The θ-only factors of [`amplitude_derivatives`] — `g(ρ)`, `g'(ρ)`,
+/// `g(η)`, `g'(η)` (two Γ and two ψ evaluations each) — computed once per
+/// objective evaluation instead of once per step.
+#[derive(Debug, Clone, Copy)]
+pub struct DerivativeConstants {
+    theta: [f64; N_PARAMS],
+    g_rho: f64,
+    dg_rho: f64,
+    g_eta: f64,
+    dg_eta: f64,
+}
+
+impl DerivativeConstants {
+    pub fn new(theta: &[f64; N_PARAMS]) -> Self {
+        let (g_rho, dg_rho) = if theta[BETA] != 0.0 {
+            (g_unchecked(theta[RHO]), g_derivative(theta[RHO]))
+        } else {
+            (0.0, 0.0)
+        };
+        let (g_eta, dg_eta) = if theta[KAPPA] != 0.0 {
+            (g_unchecked(theta[ETA]), g_derivative(theta[ETA]))
+        } else {
+            (0.0, 0.0)
+        };
+        Self {
+            theta: *theta,
+            g_rho,
+            dg_rho,
+            g_eta,
+            dg_eta,
+        }
     }
-    if kappa != 0.0 {
-        let wae = (eta * lwa).exp();
-        h[KAPPA] = w2 * d * ge * wae;
-        h[ETA] = w2 * d * kappa * wae * (g_derivative(eta) + ge * lwa);
+
+    /// `da/dθ` at the root `a` for input `gamma` at `omega` (module docs).
+    pub fn derivatives(&self, gamma: f64, omega: f64, a: f64) -> [f64; N_PARAMS] {
+        let theta = &self.theta;
+        let (alpha, delta, beta, rho, kappa, eta, gain) = (
+            theta[ALPHA],
+            theta[DELTA],
+            theta[BETA],
+            theta[RHO],
+            theta[KAPPA],
+            theta[ETA],
+            theta[GAIN],
+        );
+        let w2 = omega * omega;
+        let la = a.ln();
+        let lwa = (omega * a).ln();
+        let (gr, ge) = (self.g_rho, self.g_eta);
+        let ar = if beta != 0.0 { (rho * la).exp() } else { 0.0 };
+        let wae = if kappa != 0.0 { (eta * lwa).exp() } else { 0.0 };
+        let gbar = gr * beta * ar;
+        let gkw = ge * kappa * wae;
+        let s = alpha + gbar - w2;
+        let d = delta + gkw;
+        let fa = s * s + w2 * d * d + rho * s * gbar + eta * w2 * d * gkw;
+        let mut h = [0.0; N_PARAMS];
+        h[ALPHA] = s;
+        h[DELTA] = w2 * d;
+        if beta != 0.0 {
+            h[BETA] = s * gr * ar;
+            h[RHO] = s * beta * ar * (self.dg_rho + gr * la);
+        }
+        if kappa != 0.0 {
+            h[KAPPA] = w2 * d * ge * wae;
+            h[ETA] = w2 * d * kappa * wae * (self.dg_eta + ge * lwa);
+        }
+        h[GAIN] = -gain * gamma * gamma / (a * a);
+        let mut out = [0.0; N_PARAMS];
+        for j in 0..N_PARAMS {
+            out[j] = -a * h[j] / fa;
+        }
+        out
     }
-    h[GAIN] = -gain * gamma * gamma / (a * a);
-    let mut out = [0.0; N_PARAMS];
-    for j in 0..N_PARAMS {
-        out[j] = -a * h[j] / fa;
+}
+
+/// The measured amplitude at a curve's first step in sweep order (the
+/// lowest frequency of an up-sweep, the highest of a down-sweep).
+pub fn first_amplitude(c: &super::data::Curve) -> f64 {
+    match c.direction {
+        SweepDirection::Up => c.amplitudes[0],
+        SweepDirection::Down => c.amplitudes[c.amplitudes.len() - 1],
     }
-    out
 }
 
 /// Model amplitudes of every curve at θ (branch-following sweeps), in
 /// data order; sticking points give 0.
+///
+/// **First step.** Where several stable steady states coexist at a curve's
+/// first step (in sweep order) the model starts on the one nearest (in
+/// `ln a`) to the measured first amplitude
+/// ([`crate::ForcedResponse::sweep_from`], sweep rule 1′): the measurement
+/// says which state the structure was on, whereas the state reached "from
+/// rest" depends on how the run was started (from rest, or continuing a
+/// previous run), which the data do not record. This is the case for
+/// down-sweeps starting inside the hysteresis window of a hardening level
+/// (the upper branch reaches beyond the highest measured frequency), for
+/// up-sweeps of softening systems starting inside theirs, and for many of
+/// the extreme parameter sets a global search visits. It costs nothing
+/// (no slow-flow integration); where the first step has one stable state
+/// the rule changes nothing.
 pub fn model_amplitudes(
     data: &Dataset,
     theta: &[f64; N_PARAMS],
@@ -461,7 +573,7 @@ pub fn model_amplitudes(
                 theta[GAIN] * c.gamma,
                 Formulation::HarmonicBalance,
             )?;
-            let sw = r.sweep(&c.omegas, c.direction)?;
+            let sw = r.sweep_from(&c.omegas, c.direction, first_amplitude(c))?;
             let mut amps: Vec<f64> = sw
                 .points
                 .iter()
@@ -486,6 +598,7 @@ pub fn evaluate(
     let mut model = Vec::with_capacity(n);
     let mut residuals = Vec::with_capacity(n);
     let mut jac = jacobian.then(|| Vec::with_capacity(n));
+    let dc = DerivativeConstants::new(theta);
     for (c, am) in data.curves.iter().zip(&amps) {
         for i in 0..c.omegas.len() {
             let sw = c.weights[i].sqrt();
@@ -494,7 +607,7 @@ pub fn evaluate(
             residuals.push(sw * (a - c.amplitudes[i]) / c.gamma);
             if let Some(j) = jac.as_mut() {
                 let row = if a > 0.0 {
-                    let mut d = amplitude_derivatives(theta, c.gamma, c.omegas[i], a);
+                    let mut d = dc.derivatives(c.gamma, c.omegas[i], a);
                     for v in d.iter_mut() {
                         *v *= sw / c.gamma;
                     }
@@ -563,7 +676,10 @@ impl<'a> Problem<'a> {
         for (j, e, sc) in [(BETA, RHO, 0), (KAPPA, ETA, 1)] {
             th[j] = match self.spec.status[j] {
                 Status::Free => {
-                    let v = self.value_or(j, u).exp();
+                    let mut v = self.value_or(j, u).exp();
+                    if j == BETA {
+                        v *= self.spec.stiffness_sign.factor();
+                    }
                     v / if sc == 0 {
                         self.beta_scale(th[e])
                     } else {
@@ -582,7 +698,9 @@ impl<'a> Problem<'a> {
             .iter()
             .map(|&j| match j {
                 RHO | ETA => th[j],
-                BETA => (th[BETA] * self.beta_scale(th[RHO])).ln(),
+                BETA => {
+                    (self.spec.stiffness_sign.factor() * th[BETA] * self.beta_scale(th[RHO])).ln()
+                }
                 KAPPA => (th[KAPPA] * self.kappa_scale(th[ETA])).ln(),
                 _ => th[j].ln(),
             })
@@ -628,9 +746,9 @@ impl<'a> Problem<'a> {
 }
 
 /// Whether the first step of some curve (in sweep order) has more than one
-/// stable steady state. The sweep then has to integrate the slow flow from
-/// rest to pick one, which is slow for the extreme parameter sets a global
-/// search visits; the optimiser treats such θ as infeasible.
+/// stable steady state. (No longer used by the optimiser: such θ are
+/// evaluated with the measured first amplitude selecting the state, see
+/// [`model_amplitudes`].)
 pub fn ambiguous_start(data: &Dataset, theta: &[f64; N_PARAMS]) -> bool {
     let model = normalised_model(theta);
     data.curves.iter().any(|c| {
@@ -658,9 +776,6 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
         let th = self.theta(u);
-        if ambiguous_start(self.data, &th) {
-            return None;
-        }
         let e = evaluate(self.data, &th, false).ok()?;
         e.residuals
             .iter()
@@ -670,9 +785,6 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.theta(u);
-        if ambiguous_start(self.data, &th) {
-            return None;
-        }
         let e = evaluate(self.data, &th, true).ok()?;
         let cols = self.dtheta_du(&th);
         let n = self.free.len();

@@ -8,6 +8,7 @@
 //! Pure mathematics: samples in, spectra out (frequencies in Hz here,
 //! since they come from a sampling frequency in Hz).
 
+pub mod stft;
 pub mod welch;
 pub mod window;
 

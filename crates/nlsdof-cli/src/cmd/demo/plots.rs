@@ -1,0 +1,399 @@
+//! SVG line plots of the demo: a grid of panels, each with its own axes and
+//! a hand-laid legend (same approach as `crate::plot`: plotters' SVG
+//! backend writes `<text>` elements, so no fonts are needed; the legend is
+//! placed by hand because plotters can only estimate text extents).
+
+use crate::error::CliError;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+
+/// Tableau-10 (as `crate::plot`), one colour per input level.
+pub const COLOURS: [RGBColor; 9] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+pub const GREY: RGBColor = RGBColor(150, 150, 150);
+pub const DARK: RGBColor = RGBColor(40, 40, 40);
+
+pub fn colour(i: usize) -> RGBColor {
+    COLOURS[i % COLOURS.len()]
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Style {
+    /// Solid line of the given width.
+    Line(u32),
+    /// Dashed line of the given width.
+    Dashed(u32),
+    /// Hollow circles of the given radius.
+    Dots(u32),
+    /// Filled circles of the given radius.
+    Filled(u32),
+}
+
+#[derive(Debug, Clone)]
+pub struct Series {
+    pub label: Option<String>,
+    pub points: Vec<(f64, f64)>,
+    pub colour: RGBColor,
+    pub style: Style,
+}
+
+impl Series {
+    pub fn new(points: Vec<(f64, f64)>, colour: RGBColor, style: Style) -> Self {
+        Self {
+            label: None,
+            points,
+            colour,
+            style,
+        }
+    }
+    pub fn label(mut self, l: impl Into<String>) -> Self {
+        self.label = Some(l.into());
+        self
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Corner {
+    TopLeft,
+    /// In a strip of [`LEGEND_W`] pixels right of the plot.
+    Outside,
+}
+
+/// Width of the [`Corner::Outside`] legend strip, pixels.
+pub const LEGEND_W: u32 = 235;
+
+#[derive(Debug, Clone)]
+pub struct Panel {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+    pub x_range: Option<(f64, f64)>,
+    pub y_range: Option<(f64, f64)>,
+    pub legend: Corner,
+    /// Logarithmic y axis (values <= 0 are dropped).
+    pub log_y: bool,
+}
+
+impl Panel {
+    pub fn new(title: impl Into<String>, x_label: &str, y_label: &str) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: Vec::new(),
+            x_range: None,
+            y_range: None,
+            legend: Corner::TopLeft,
+            log_y: false,
+        }
+    }
+}
+
+/// plotters lays text out with ab_glyph (enabled for the PNG figures), which
+/// needs a registered font even for SVG output (`main` registers it too;
+/// this keeps the module usable from tests).
+fn ensure_font() {
+    crate::fonts::register();
+}
+
+fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
+    CliError::Usage(format!("demo: cannot draw a figure: {e}"))
+}
+
+/// Tick label with decimals suited to an axis spanning `span`.
+fn tick(v: f64, span: f64) -> String {
+    let decimals = (1.0 - span.abs().max(1e-300).log10().floor()).clamp(0.0, 8.0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+        s[1..].to_string()
+    } else {
+        s
+    }
+}
+
+fn auto_range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for s in &panel.series {
+        for &(x, y) in &s.points {
+            if x.is_finite() && y.is_finite() {
+                x0 = x0.min(x);
+                x1 = x1.max(x);
+                y0 = y0.min(y);
+                y1 = y1.max(y);
+            }
+        }
+    }
+    if x0.partial_cmp(&x1) != Some(std::cmp::Ordering::Less) {
+        x0 = if x0.is_finite() { x0 - 1.0 } else { 0.0 };
+        x1 = x0 + 2.0;
+    }
+    if y0.partial_cmp(&y1) != Some(std::cmp::Ordering::Less) {
+        y0 = if y0.is_finite() { y0 - 1.0 } else { 0.0 };
+        y1 = y0 + 2.0;
+    }
+    let pad = 0.05 * (y1 - y0);
+    let x = panel.x_range.unwrap_or((x0, x1));
+    let y = panel.y_range.unwrap_or((y0 - pad, y1 + pad));
+    (x, y)
+}
+
+/// Renders `panels` in a grid of `cols` columns, each panel `w × h` pixels,
+/// under a figure title. Returns the SVG document.
+pub fn render(
+    title: &str,
+    panels: &[Panel],
+    cols: usize,
+    w: u32,
+    h: u32,
+) -> Result<String, CliError> {
+    ensure_font();
+    let cols = cols.max(1);
+    let rows = panels.len().div_ceil(cols).max(1);
+    let title_h = 40u32;
+    let (width, height) = (w * cols as u32, h * rows as u32 + title_h);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        root.draw(&Text::new(
+            title.to_string(),
+            (16, 12),
+            ("sans-serif", 19).into_font().color(&BLACK),
+        ))
+        .map_err(plot_err)?;
+        let (_, body) = root.split_vertically(title_h);
+        let areas = body.split_evenly((rows, cols));
+        for (panel, area) in panels.iter().zip(areas.iter()) {
+            draw_panel(&root, area, panel)?;
+        }
+        root.present().map_err(plot_err)?;
+    }
+    Ok(svg)
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    panel: &Panel,
+) -> Result<(), CliError> {
+    let (chart_area, legend_area) = if panel.legend == Corner::Outside {
+        let (w, _) = area.dim_in_pixel();
+        let (a, b) = area.split_horizontally(w.saturating_sub(LEGEND_W));
+        (a, Some(b))
+    } else {
+        (area.clone(), None)
+    };
+    let area = &chart_area;
+    // a log axis is drawn as log10 of the values with labels 10^v
+    let logged;
+    let panel = if panel.log_y {
+        let mut p = panel.clone();
+        for s in &mut p.series {
+            s.points = s
+                .points
+                .iter()
+                .filter(|q| q.1 > 0.0)
+                .map(|&(x, y)| (x, y.log10()))
+                .collect();
+        }
+        p.y_range = panel.y_range.map(|(a, b)| (a.log10(), b.log10()));
+        logged = p;
+        &logged
+    } else {
+        panel
+    };
+    let ((x0, x1), (y0, y1)) = auto_range(panel);
+    let (xs, ys) = (x1 - x0, y1 - y0);
+    let x_fmt = |v: &f64| tick(*v, xs);
+    let log_y = panel.log_y;
+    let y_fmt = move |v: &f64| {
+        if log_y {
+            let p = 10f64.powf(*v);
+            let d = (1.0 - p.log10().floor()).clamp(0.0, 8.0) as usize;
+            format!("{p:.d$}")
+        } else {
+            tick(*v, ys)
+        }
+    };
+    let mut chart = ChartBuilder::on(area)
+        .caption(&panel.title, ("sans-serif", 15))
+        .margin(10)
+        .margin_right(18)
+        .x_label_area_size(42)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc(panel.x_label.as_str())
+        .y_desc(panel.y_label.as_str())
+        .x_labels(8)
+        .y_labels(7)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .axis_desc_style(("sans-serif", 13))
+        .label_style(("sans-serif", 12))
+        .bold_line_style(RGBColor(222, 222, 222))
+        .light_line_style(RGBColor(244, 244, 244))
+        .draw()
+        .map_err(plot_err)?;
+    let inside = |&(x, y): &(f64, f64)| {
+        x.is_finite() && y.is_finite() && x >= x0 && x <= x1 && y >= y0 && y <= y1
+    };
+    for s in &panel.series {
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .map(|(x, y)| (x, y.clamp(y0, y1)))
+            .collect();
+        match s.style {
+            Style::Line(wd) => {
+                chart
+                    .draw_series(LineSeries::new(pts, s.colour.stroke_width(wd)))
+                    .map_err(plot_err)?;
+            }
+            Style::Dashed(wd) => {
+                chart
+                    .draw_series(DashedLineSeries::new(pts, 6, 4, s.colour.stroke_width(wd)))
+                    .map_err(plot_err)?;
+            }
+            Style::Dots(r) => {
+                chart
+                    .draw_series(
+                        s.points
+                            .iter()
+                            .filter(|p| inside(p))
+                            .map(|&p| Circle::new(p, r, s.colour.stroke_width(1))),
+                    )
+                    .map_err(plot_err)?;
+            }
+            Style::Filled(r) => {
+                chart
+                    .draw_series(
+                        s.points
+                            .iter()
+                            .filter(|p| inside(p))
+                            .map(|&p| Circle::new(p, r, s.colour.filled())),
+                    )
+                    .map_err(plot_err)?;
+            }
+        }
+    }
+    // legend, by hand, in pixels
+    let entries: Vec<&Series> = panel.series.iter().filter(|s| s.label.is_some()).collect();
+    if entries.is_empty() {
+        return Ok(());
+    }
+    let (px0, py0) = chart.backend_coord(&(x0, y1));
+
+    let row = 16;
+    let font = 12;
+    let text_w = entries
+        .iter()
+        .map(|s| s.label.as_ref().map_or(0, |l| l.chars().count()))
+        .max()
+        .unwrap_or(0) as i32
+        * 68
+        / 10;
+    let box_w = 40 + text_w + 8;
+    let box_h = row * entries.len() as i32 + 8;
+    let (bx, by) = match (panel.legend, &legend_area) {
+        (Corner::Outside, Some(la)) => {
+            let (ox, _) = la.get_base_pixel();
+            (ox + 4, py0 + 8)
+        }
+        _ => (px0 + 8, py0 + 8),
+    };
+    root.draw(&Rectangle::new(
+        [(bx, by), (bx + box_w, by + box_h)],
+        ShapeStyle::from(&WHITE.mix(0.85)).filled(),
+    ))
+    .map_err(plot_err)?;
+    root.draw(&Rectangle::new(
+        [(bx, by), (bx + box_w, by + box_h)],
+        RGBColor(200, 200, 200).stroke_width(1),
+    ))
+    .map_err(plot_err)?;
+    for (i, s) in entries.iter().enumerate() {
+        let y = by + 4 + row * i as i32 + row / 2;
+        let (lx0, lx1) = (bx + 6, bx + 32);
+        match s.style {
+            Style::Line(wd) => root
+                .draw(&PathElement::new(
+                    vec![(lx0, y), (lx1, y)],
+                    s.colour.stroke_width(wd.max(2)),
+                ))
+                .map_err(plot_err)?,
+            Style::Dashed(wd) => root
+                .draw(&DashedPathElement::new(
+                    vec![(lx0, y), (lx1, y)],
+                    6,
+                    4,
+                    s.colour.stroke_width(wd.max(2)),
+                ))
+                .map_err(plot_err)?,
+            Style::Dots(r) => root
+                .draw(&Circle::new(
+                    ((lx0 + lx1) / 2, y),
+                    r.max(2),
+                    s.colour.stroke_width(1),
+                ))
+                .map_err(plot_err)?,
+            Style::Filled(r) => root
+                .draw(&Circle::new(
+                    ((lx0 + lx1) / 2, y),
+                    r.max(2),
+                    s.colour.filled(),
+                ))
+                .map_err(plot_err)?,
+        }
+        root.draw(&Text::new(
+            s.label.clone().unwrap_or_default(),
+            (bx + 40, y - font / 2 - 1),
+            ("sans-serif", font as u32).into_font().color(&BLACK),
+        ))
+        .map_err(plot_err)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks() {
+        assert_eq!(tick(5.25, 0.2), "5.25");
+        assert_eq!(tick(-0.0, 1.0), "0.0");
+        assert_eq!(tick(12.0, 40.0), "12");
+    }
+
+    #[test]
+    fn renders_panels_and_legend() {
+        let mut p = Panel::new("a panel", "x [Hz]", "y [m]");
+        p.series.push(
+            Series::new(vec![(0.0, 1.0), (1.0, 2.0)], colour(0), Style::Line(2)).label("line"),
+        );
+        p.series
+            .push(Series::new(vec![(0.5, 1.5)], colour(1), Style::Dots(2)).label("dots"));
+        let svg = render("title", &[p.clone(), p], 2, 400, 300).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("a panel") && svg.contains("dots"));
+    }
+}

@@ -1,0 +1,709 @@
+//! `nlsdof fit --phase-resonance` and `nlsdof compare --phase-resonance`:
+//! fit the power-law models to phase-resonance points (`gamma,f_hz,amplitude`
+//! at 90° phase per level; `nlsdof::identification::phase_resonance`), and
+//! the `--sign` choice (hardening / softening / auto) shared with sweep fits.
+
+use super::fit::{
+    apply_bounds, apply_fix_free, parse_model_kind, progress_bar, resolve_mass, DataArgs,
+};
+use crate::error::CliError;
+use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
+use nlsdof::identification::phase_resonance::{
+    default_spec, fit_phase_resonance, integer_search_phase_resonance, PrDataset, PrFitOptions,
+    PrFitResult,
+};
+use nlsdof::identification::{
+    fit, Dataset, FitOptions, FitResult, FitSpec, ModelKind, Sign, Status, N_PARAMS, PARAM_NAMES,
+};
+use nlsdof_io::phase_resonance_data::read_csv;
+use nlsdof_io::stepped_sine_data::{AmplitudeKind, ReadOptions};
+use serde_json::{json, Value};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+
+/// Options of `fit` and `compare` added for phase-resonance data and the
+/// stiffness sign.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PrArgs {
+    /// DATA holds phase-resonance points, one row per level: gamma,f_hz,amplitude[,level][,weight]
+    /// (frequency and amplitude where the phase lag is 90 deg, like Table 8's experimental
+    /// columns); '#' lines are comments. Unit options (--peak-to-peak, --gamma-in-g,
+    /// --velocity, --acceleration) apply as for sweeps. Not auto-detected.
+    #[arg(long = "phase-resonance")]
+    pub phase_resonance: bool,
+    /// Relative weight w_f of the frequency residuals of --phase-resonance fits. 1 (default):
+    /// a relative frequency error zeta0*e costs as much as a relative amplitude error e
+    /// (zeta0 = damping ratio of the lowest level), as a relative error e of the measured
+    /// response does to the two. > 1 trusts the frequencies more.
+    #[arg(long = "frequency-weight", value_name = "W", default_value_t = 1.0)]
+    pub frequency_weight: f64,
+    /// Sign of the nonlinear stiffness beta: hardening (beta > 0), softening (beta < 0), or
+    /// auto (fit both, keep the lower cost, report both).
+    #[arg(long, value_enum, default_value = "hardening")]
+    pub sign: SignArg,
+    /// Short for --sign softening.
+    #[arg(long)]
+    pub softening: bool,
+}
+
+/// `--sign`: sign of the fitted nonlinear stiffness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SignArg {
+    /// beta > 0 (default).
+    #[default]
+    Hardening,
+    /// beta < 0.
+    Softening,
+    /// Fit both signs, keep the lower cost (both costs are reported).
+    Auto,
+}
+
+impl SignArg {
+    /// `--softening` is short for `--sign softening`.
+    pub fn resolve(self, softening: bool) -> Result<SignArg, CliError> {
+        match (softening, self) {
+            (false, s) => Ok(s),
+            (true, SignArg::Hardening | SignArg::Softening) => Ok(SignArg::Softening),
+            (true, SignArg::Auto) => Err(CliError::Usage(
+                "--softening conflicts with --sign auto".into(),
+            )),
+        }
+    }
+
+    /// The signs to fit for `kind` (one sign if the model has no stiffness term).
+    pub fn signs(self, kind: ModelKind) -> Vec<Sign> {
+        use nlsdof::identification::models::Term;
+        if kind.stiffness() == Term::Absent {
+            return vec![Sign::Hardening];
+        }
+        match self {
+            SignArg::Hardening => vec![Sign::Hardening],
+            SignArg::Softening => vec![Sign::Softening],
+            SignArg::Auto => vec![Sign::Hardening, Sign::Softening],
+        }
+    }
+}
+
+/// Outcome of each sign tried by `--sign auto`: (sign, cost or error).
+pub type SignTrials = Vec<(Sign, Result<f64, String>)>;
+
+/// JSON of the `--sign auto` trials (`None` if only one sign was fitted).
+pub fn sign_trials_json(t: &SignTrials) -> Option<Value> {
+    (t.len() > 1).then(|| {
+        Value::Array(
+            t.iter()
+                .map(|(s, r)| match r {
+                    Ok(c) => json!({"sign": s.name(), "cost": c}),
+                    Err(e) => json!({"sign": s.name(), "error": e}),
+                })
+                .collect(),
+        )
+    })
+}
+
+/// Text of the `--sign auto` trials (empty if only one sign was fitted).
+pub fn sign_trials_text(t: &SignTrials, chosen: Sign) -> String {
+    if t.len() < 2 {
+        return String::new();
+    }
+    let mut s = format!("--sign auto: kept {}; ", chosen.name());
+    let parts: Vec<String> = t
+        .iter()
+        .map(|(sg, r)| match r {
+            Ok(c) => format!("{} cost {c:.6e}", sg.name()),
+            Err(e) => format!("{} failed ({e})", sg.name()),
+        })
+        .collect();
+    s.push_str(&parts.join(", "));
+    s.push('\n');
+    s
+}
+
+/// Sweep fit (Eq 31) with the stiffness sign chosen by `sign`
+/// (`Auto`: both signs, the lower cost kept). `configure` applies
+/// bounds/--fix/--free to each spec.
+pub fn fit_sweep_signed(
+    data: &Dataset,
+    kind: ModelKind,
+    sign: SignArg,
+    configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
+    opts: &FitOptions,
+) -> Result<(FitResult, SignTrials), CliError> {
+    let mut best: Option<FitResult> = None;
+    let mut trials = Vec::new();
+    let mut last_err = None;
+    for s in sign.signs(kind) {
+        let mut spec = FitSpec::new_signed(kind, data, s);
+        configure(&mut spec)?;
+        let pb = progress_bar(opts.starts, &format!("{} ({})", kind.name(), s.name()));
+        let r = fit(data, &spec, opts, &|| pb.inc(1));
+        pb.finish_and_clear();
+        match r {
+            Ok(r) => {
+                trials.push((s, Ok(r.cost)));
+                if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                    best = Some(r);
+                }
+            }
+            Err(e) => {
+                trials.push((s, Err(e.to_string())));
+                last_err = Some(e.to_string());
+            }
+        }
+    }
+    best.map(|b| (b, trials))
+        .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
+}
+
+/// Phase-resonance fit with the stiffness sign chosen by `sign`.
+pub fn fit_pr_signed(
+    data: &PrDataset,
+    kind: ModelKind,
+    sign: SignArg,
+    configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
+    opts: &PrFitOptions,
+) -> Result<(PrFitResult, SignTrials), CliError> {
+    let mut best: Option<PrFitResult> = None;
+    let mut trials = Vec::new();
+    let mut last_err = None;
+    for s in sign.signs(kind) {
+        let mut spec = default_spec(kind, data, s);
+        configure(&mut spec)?;
+        let pb = progress_bar(opts.starts, &format!("{} ({})", kind.name(), s.name()));
+        let r = fit_phase_resonance(data, &spec, opts, &|| pb.inc(1));
+        pb.finish_and_clear();
+        match r {
+            Ok(r) => {
+                trials.push((s, Ok(r.cost)));
+                if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                    best = Some(r);
+                }
+            }
+            Err(e) => {
+                trials.push((s, Err(e.to_string())));
+                last_err = Some(e.to_string());
+            }
+        }
+    }
+    best.map(|b| (b, trials))
+        .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
+}
+
+impl DataArgs {
+    /// Reads DATA as phase-resonance points (`--phase-resonance`).
+    pub fn load_phase_resonance(&self) -> Result<PrDataset, CliError> {
+        if self.beam_dir.is_some() {
+            return Err(CliError::Usage(
+                "--phase-resonance reads a CSV file of gamma,f_hz,amplitude points, not --beam-dir"
+                    .into(),
+            ));
+        }
+        let path = self
+            .data
+            .as_ref()
+            .ok_or_else(|| CliError::Usage("--phase-resonance needs a DATA file".into()))?;
+        let opts = ReadOptions {
+            amplitude: if self.velocity {
+                AmplitudeKind::Velocity
+            } else if self.acceleration {
+                AmplitudeKind::Acceleration
+            } else {
+                AmplitudeKind::Displacement
+            },
+            gamma_in_g: self.gamma_in_g,
+            peak_to_peak: self.peak_to_peak,
+        };
+        read_csv(path, &opts).map_err(|e| CliError::Usage(e.to_string()))
+    }
+}
+
+fn hz(w: f64) -> f64 {
+    w / (2.0 * PI)
+}
+
+const PHYS: [(&str, &str); N_PARAMS] = [
+    ("k", "N/m"),
+    ("c", "N s/m"),
+    ("k_r", "N/m^(rho+1)"),
+    ("rho", "-"),
+    ("c_e", "N (s/m)^(eta+1)"),
+    ("eta", "-"),
+    ("gain", "-"),
+];
+
+fn status_name(s: Status) -> &'static str {
+    match s {
+        Status::Absent => "absent",
+        Status::Fixed(_) => "fixed",
+        Status::Free => "free",
+    }
+}
+
+fn mass_scaled(j: usize) -> bool {
+    matches!(j, ALPHA | DELTA | BETA | KAPPA)
+}
+
+/// JSON of one phase-resonance fit (same parameter block as sweep fits).
+pub fn pr_json(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> Value {
+    let m = mass.unwrap_or(1.0);
+    let mut params = Vec::new();
+    for j in 0..N_PARAMS {
+        if res.status[j] == Status::Absent {
+            continue;
+        }
+        let unc = res.uncertainty.as_ref().and_then(|u| {
+            u.names
+                .iter()
+                .position(|n| *n == PARAM_NAMES[j])
+                .map(|k| (u, k))
+        });
+        let phys = |v: f64| if mass_scaled(j) { v * m } else { v };
+        params.push(json!({
+            "name": PARAM_NAMES[j],
+            "status": status_name(res.status[j]),
+            "value": res.theta[j],
+            "std_error": unc.map(|(u, k)| u.std_errors[k]),
+            "ci95": unc.map(|(u, k)| [u.lower[k], u.upper[k]]),
+            "physical": { "name": PHYS[j].0, "unit": PHYS[j].1, "value": phys(res.theta[j]),
+                          "ci95": unc.map(|(u, k)| [phys(u.lower[k]), phys(u.upper[k])]) },
+        }));
+    }
+    let pq: Vec<Value> = res
+        .rows
+        .iter()
+        .map(|r| {
+            let (df, da) = r.differences_percent();
+            json!({
+                "level": r.level, "gamma": r.gamma, "measured_from": "phase-resonance data",
+                "measured_f_hz": hz(r.measured_omega), "measured_amplitude": r.measured_amplitude,
+                "model_f_hz": hz(r.model_omega), "model_amplitude": r.model_amplitude,
+                "diff_f_percent": df, "diff_amplitude_percent": da,
+            })
+        })
+        .collect();
+    let minima: Vec<Value> = res
+        .minima
+        .iter()
+        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta}))
+        .collect();
+    json!({
+        "data": "phase-resonance",
+        "model": res.kind.name(),
+        "stiffness_sign": res.stiffness_sign.name(),
+        "parameters": params,
+        "parameter_order": PARAM_NAMES,
+        "theta": res.theta,
+        "mass": mass,
+        "mass_note": if mass.is_none() { Some("no mass given: physical values are per unit mass (m = 1 kg)") } else { None },
+        "cost": res.cost,
+        "rms": res.rms(),
+        "frequency_weight": frequency_weight,
+        "frequency_scale": res.frequency_scale,
+        "aic": res.aic(), "bic": res.bic(),
+        "points": res.n_points, "residuals": 2 * res.n_points, "free_parameters": res.n_free,
+        "termination": res.termination.name(),
+        "iterations": res.iterations,
+        "correlation": res.uncertainty.as_ref().map(|u| json!({"names": u.names, "matrix": u.correlation})),
+        "minima": minima,
+        "phase_quadrature": pq,
+    })
+}
+
+/// The measured-vs-model table of a phase-resonance fit.
+pub fn pr_table_text(res: &PrFitResult) -> String {
+    let mut s = String::new();
+    writeln!(
+        s,
+        "\nphase resonance ({}): {:<10} {:>10} {:>12} {:>12} {:>9} {:>12} {:>12} {:>9}",
+        res.kind,
+        "level",
+        "gamma",
+        "f_meas [Hz]",
+        "f_model",
+        "diff %",
+        "a_meas [m]",
+        "a_model",
+        "diff %"
+    )
+    .ok();
+    for r in &res.rows {
+        let (df, da) = r.differences_percent();
+        writeln!(
+            s,
+            "  {:<10} {:>10.5} {:>12.5} {:>12.5} {:>9.3} {:>12.5e} {:>12.5e} {:>9.3}",
+            r.level,
+            r.gamma,
+            hz(r.measured_omega),
+            hz(r.model_omega),
+            df,
+            r.measured_amplitude,
+            r.model_amplitude,
+            da
+        )
+        .ok();
+    }
+    s
+}
+
+/// Human-readable report of one phase-resonance fit.
+pub fn pr_text(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> String {
+    let mut s = String::new();
+    let m = mass.unwrap_or(1.0);
+    writeln!(
+        s,
+        "model {} from phase-resonance points: cost = {:.6e}, RMS = {:.6e} s^2, {} levels ({} residuals), {} free parameters",
+        res.kind,
+        res.cost,
+        res.rms(),
+        res.n_points,
+        2 * res.n_points,
+        res.n_free
+    )
+    .ok();
+    writeln!(
+        s,
+        "frequency weight w_f = {frequency_weight} (W = {:.6e} s^2); stiffness sign: {}",
+        res.frequency_scale,
+        res.stiffness_sign.name()
+    )
+    .ok();
+    writeln!(
+        s,
+        "termination: {} after {} iterations",
+        res.termination, res.iterations
+    )
+    .ok();
+    if mass.is_none() {
+        writeln!(
+            s,
+            "note: no mass given (--mass); physical values are per unit mass (m = 1 kg)"
+        )
+        .ok();
+    }
+    writeln!(
+        s,
+        "{:<6} {:>7} {:>15} {:>12} {:>33}   {}",
+        "param", "status", "value", "std error", "95 % interval", "physical"
+    )
+    .ok();
+    for j in 0..N_PARAMS {
+        if res.status[j] == Status::Absent {
+            continue;
+        }
+        let unc = res.uncertainty.as_ref().and_then(|u| {
+            u.names
+                .iter()
+                .position(|n| *n == PARAM_NAMES[j])
+                .map(|k| (u, k))
+        });
+        let (se, ci) = match unc {
+            Some((u, k)) => (
+                format!("{:.4e}", u.std_errors[k]),
+                format!("[{:.6e}, {:.6e}]", u.lower[k], u.upper[k]),
+            ),
+            None => ("-".into(), "-".into()),
+        };
+        let phys = if mass_scaled(j) {
+            res.theta[j] * m
+        } else {
+            res.theta[j]
+        };
+        writeln!(
+            s,
+            "{:<6} {:>7} {:>15.8e} {:>12} {:>33}   {} = {:.8e} {}",
+            PARAM_NAMES[j],
+            status_name(res.status[j]),
+            res.theta[j],
+            se,
+            ci,
+            PHYS[j].0,
+            phys,
+            PHYS[j].1
+        )
+        .ok();
+    }
+    let wn = res.theta[ALPHA].sqrt();
+    writeln!(
+        s,
+        "f_n = {:.6} Hz, zeta = {:.6e}",
+        hz(wn),
+        res.theta[DELTA] / (2.0 * wn)
+    )
+    .ok();
+    if res.uncertainty.is_none() {
+        writeln!(
+            s,
+            "intervals: not available (no residual degrees of freedom: 2 x levels = free parameters)"
+        )
+        .ok();
+    }
+    s.push_str(&pr_table_text(res));
+    if res.minima.len() > 1 || res.minima.first().map_or(false, |m| m.count > 1) {
+        writeln!(s, "\ndistinct local minima ({}):", res.minima.len()).ok();
+        for (i, mm) in res.minima.iter().enumerate().take(20) {
+            let free: Vec<String> = (0..N_PARAMS)
+                .filter(|&j| res.status[j] == Status::Free)
+                .map(|j| format!("{}={:.5e}", PARAM_NAMES[j], mm.theta[j]))
+                .collect();
+            writeln!(
+                s,
+                "  #{:<3} cost {:.6e}  starts {:>4}  {}  {}",
+                i + 1,
+                mm.cost,
+                mm.count,
+                mm.termination,
+                free.join(" ")
+            )
+            .ok();
+        }
+    }
+    s
+}
+
+/// Checks `--frequency-weight`.
+pub fn check_frequency_weight(w: f64) -> Result<(), CliError> {
+    if !(w.is_finite() && w > 0.0) {
+        return Err(CliError::Usage(format!(
+            "--frequency-weight {w} is not allowed: it must be finite and > 0"
+        )));
+    }
+    Ok(())
+}
+
+/// `nlsdof fit DATA --phase-resonance ...`.
+pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
+    if args.integer && sign == SignArg::Auto {
+        return Err(CliError::Usage(
+            "--sign auto is not available with --integer: choose --sign hardening or softening"
+                .into(),
+        ));
+    }
+    if args.plot.is_some() {
+        return Err(CliError::Usage(
+            "--plot is not available with --phase-resonance (the table of measured and model points is printed)".into(),
+        ));
+    }
+    check_frequency_weight(args.pr.frequency_weight)?;
+    if args.starts == 0 || args.starts > 100_000 {
+        return Err(CliError::Usage(format!(
+            "--starts {} is not allowed: use 1..=100000",
+            args.starts
+        )));
+    }
+    let data = args.data.load_phase_resonance()?;
+    let kind = parse_model_kind(&args.model)?;
+    // resolve the mass before fitting (and check --fix once)
+    let mut probe = default_spec(kind, &data, Sign::Hardening);
+    let fix_mass = apply_fix_free(&mut probe, args.fix.as_deref(), args.free.as_deref())?;
+    let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
+    let configure = |spec: &mut FitSpec| -> Result<(), CliError> {
+        if let Some(b) = &args.bounds {
+            apply_bounds(spec, b)?;
+        }
+        apply_fix_free(spec, args.fix.as_deref(), args.free.as_deref())?;
+        Ok(())
+    };
+    let opts = PrFitOptions {
+        starts: args.starts,
+        seed: args.seed,
+        frequency_weight: args.pr.frequency_weight,
+        ..PrFitOptions::default()
+    };
+    let mut integer_table = Vec::new();
+    let (res, trials) = if args.integer {
+        let mut spec = default_spec(
+            kind,
+            &data,
+            if sign == SignArg::Softening {
+                Sign::Softening
+            } else {
+                Sign::Hardening
+            },
+        );
+        configure(&mut spec)?;
+        if spec.status[RHO] != Status::Free && spec.status[ETA] != Status::Free {
+            return Err(CliError::Usage(format!(
+                "--integer: the {kind} model has no free exponent"
+            )));
+        }
+        let mut best: Option<PrFitResult> = None;
+        for c in integer_search_phase_resonance(&data, &spec, &opts) {
+            match c.fit {
+                Ok(r) => {
+                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "cost": r.cost, "termination": r.termination.name()}));
+                    if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                        best = Some(r);
+                    }
+                }
+                Err(e) => {
+                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "error": e.to_string()}))
+                }
+            }
+        }
+        let best = best.ok_or_else(|| {
+            CliError::Usage("--integer: no integer exponent pair could be fitted".into())
+        })?;
+        (best, Vec::new())
+    } else {
+        fit_pr_signed(&data, kind, sign, &configure, &opts)?
+    };
+    if let Some(out) = &args.out {
+        let m = mass.unwrap_or(1.0);
+        let model = res.model().to_physical(m)?;
+        let mut text = format!(
+            "# fitted by `nlsdof fit --phase-resonance`, model {}, cost {:.6e}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
+            res.kind, res.cost, res.theta[GAIN]
+        );
+        if mass.is_none() {
+            text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
+        }
+        text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
+        nlsdof_io::atomic::write_atomic(out, text.as_bytes())?;
+    }
+    if args.json {
+        let mut v = pr_json(&res, mass, args.pr.frequency_weight);
+        if let Some(t) = sign_trials_json(&trials) {
+            v["sign_auto"] = t;
+        }
+        if args.integer {
+            v["integer_pairs"] = Value::Array(integer_table);
+        }
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else {
+        let mut s = sign_trials_text(&trials, res.stiffness_sign);
+        s.push_str(&pr_text(&res, mass, args.pr.frequency_weight));
+        if args.integer {
+            s.push_str("\ninteger exponent pairs (rho, eta): cost\n");
+            for r in &integer_table {
+                writeln!(
+                    s,
+                    "  ({}, {}): {}",
+                    r["rho"],
+                    r["eta"],
+                    r.get("cost")
+                        .map(|c| format!("{:.6e}", c.as_f64().unwrap_or(f64::NAN)))
+                        .unwrap_or_else(|| r["error"].to_string())
+                )
+                .ok();
+            }
+        }
+        print!("{s}");
+    }
+    Ok(())
+}
+
+/// `nlsdof compare DATA --phase-resonance ...` from the parsed arguments.
+pub fn run_compare_args(args: &super::compare::Args) -> Result<(), CliError> {
+    let sign = args.pr.sign.resolve(args.pr.softening)?;
+    let kinds = args
+        .models
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(parse_model_kind)
+        .collect::<Result<Vec<_>, _>>()?;
+    if kinds.is_empty() {
+        return Err(CliError::Usage("--models is empty".into()));
+    }
+    if args.starts == 0 || args.starts > 100_000 {
+        return Err(CliError::Usage(format!(
+            "--starts {} is not allowed: use 1..=100000",
+            args.starts
+        )));
+    }
+    let mass = resolve_mass(args.mass, None, None)?;
+    let opts = PrFitOptions {
+        starts: args.starts,
+        seed: args.seed,
+        frequency_weight: args.pr.frequency_weight,
+        ..PrFitOptions::default()
+    };
+    run_compare(
+        &args.data,
+        &kinds,
+        args.free.as_deref(),
+        sign,
+        &opts,
+        mass,
+        args.json,
+    )
+}
+
+/// `nlsdof compare DATA --phase-resonance ...`: one fit per model.
+pub fn run_compare(
+    data_args: &DataArgs,
+    kinds: &[ModelKind],
+    free: Option<&str>,
+    sign: SignArg,
+    opts: &PrFitOptions,
+    mass: Option<f64>,
+    as_json: bool,
+) -> Result<(), CliError> {
+    check_frequency_weight(opts.frequency_weight)?;
+    let data = data_args.load_phase_resonance()?;
+    let mut results = Vec::new();
+    for &kind in kinds {
+        let configure = |spec: &mut FitSpec| -> Result<(), CliError> {
+            if let Some(list) = free {
+                for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+                    match spec.free(name) {
+                        Ok(()) | Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
+                        Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
+                    }
+                }
+            }
+            Ok(())
+        };
+        let (r, _) = fit_pr_signed(&data, kind, sign, &configure, opts)
+            .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
+        results.push(r);
+    }
+    if as_json {
+        let v: Vec<Value> = results
+            .iter()
+            .map(|r| pr_json(r, mass, opts.frequency_weight))
+            .collect();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({"models": v})).expect("json")
+        );
+        return Ok(());
+    }
+    let mut s = String::new();
+    writeln!(
+        s,
+        "{:<22} {:>4} {:>14} {:>12} {:>12} {:>12}  parameters (mass-normalised)",
+        "model", "p", "cost", "RMS", "AIC", "BIC"
+    )
+    .ok();
+    for r in &results {
+        let params: Vec<String> = (0..N_PARAMS)
+            .filter(|&j| r.status[j] != Status::Absent)
+            .map(|j| {
+                format!(
+                    "{}={:.5e}{}",
+                    PARAM_NAMES[j],
+                    r.theta[j],
+                    if r.status[j] == Status::Free { "" } else { "*" }
+                )
+            })
+            .collect();
+        writeln!(
+            s,
+            "{:<22} {:>4} {:>14.6e} {:>12.4e} {:>12.2} {:>12.2}  {}",
+            r.kind.name(),
+            r.n_free,
+            r.cost,
+            r.rms(),
+            r.aic(),
+            r.bic(),
+            params.join(" ")
+        )
+        .ok();
+    }
+    s.push_str("(* = held fixed; phase-resonance points, 2 residuals per level)\n");
+    for r in &results {
+        s.push_str(&pr_table_text(r));
+    }
+    print!("{s}");
+    Ok(())
+}

@@ -1,0 +1,339 @@
+//! Jump-frequency residuals: an optional term added to Eq 31 so that a fit
+//! can be asked to put the up-sweep jumps where they were measured.
+//!
+//! The Eq 31 cost is piecewise constant in the location of a model jump
+//! (moving the jump inside one step interval changes no residual), so a
+//! gradient-based solver cannot move it. This term is continuous and
+//! differentiable: for each up-sweep curve c with a measured jump-down
+//! (the last step on the upper branch, [`super::Curve::measured_jump`]
+//! with ratio 2) it adds
+//!
+//! ```text
+//! r_J,c = √(λ n_c) · (a_peak,c/γ_c) · (Ω_J,c(θ)/Ω_J,c,meas − 1)
+//! ```
+//!
+//! * `Ω_J,c(θ)` predicted: the first jump of the model's sweep of curve c
+//!   (its fold frequency `Ω_f`, differentiable in θ, see
+//!   [`fold_frequency_derivatives`]); where the model sweep does not jump,
+//!   its phase-quadrature frequency `Ω_pq` (where the response curve meets
+//!   the backbone, `S = 0`; a hardening up-sweep's upper branch ends at the
+//!   fold just past it, `O(ζ)` apart, so the two nearly agree where the
+//!   fold appears), so the term exists and is continuous enough for LM
+//!   where a fold is born or dies;
+//! * `(a_peak/γ)` (largest measured normalised amplitude of the curve) puts
+//!   the term in the units of the Eq 31 residuals, and `n_c` is the number
+//!   of steps of the curve: with `λ = 1` a 1 % jump error costs as much as a
+//!   1 %-of-peak error at every step of the curve.
+//!
+//! ## Derivative of the phase-quadrature frequency
+//! At the phase-quadrature point
+//!
+//! ```text
+//! G₁ = α + g(ρ)β a^ρ − Ω² = 0,     G₂ = a Ω D − gain γ = 0,
+//! D  = δ + g(η) κ (Ω a)^η
+//! ```
+//!
+//! so `[∂G/∂(a, Ω)] (da, dΩ)ᵀ = −∂G/∂θ` (implicit differentiation) with
+//!
+//! ```text
+//! ∂G₁/∂a = ρ g(ρ)β a^{ρ−1}      ∂G₁/∂Ω = −2Ω
+//! ∂G₂/∂a = Ω (D + η k)          ∂G₂/∂Ω = a (D + η k),   k = g(η)κ(Ωa)^η
+//! ∂G₁/∂α = 1, ∂G₁/∂β = g(ρ)a^ρ, ∂G₁/∂ρ = β a^ρ (g'(ρ) + g(ρ) ln a)
+//! ∂G₂/∂δ = aΩ, ∂G₂/∂κ = aΩ g(η)(Ωa)^η,
+//! ∂G₂/∂η = aΩ κ (Ωa)^η (g'(η) + g(η) ln(Ωa)),  ∂G₂/∂gain = −γ
+//! ```
+//!
+//! solved by Cramer's rule for `dΩ/dθ`.
+
+use super::data::Dataset;
+use super::levenberg_marquardt::LeastSquares;
+use super::models::*;
+use super::objective::{evaluate, normalised_model, Problem};
+use crate::error::SolveError;
+use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
+use crate::power_law::g_unchecked;
+use crate::special::g_derivative;
+
+/// Measured jump of one curve and the scale of its residual.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JumpTarget {
+    /// Index of the curve in the data set.
+    pub curve: usize,
+    /// Measured jump-down frequency Ω_J (rad/s).
+    pub omega: f64,
+    /// `√(n_c) · a_peak/γ` (s²).
+    pub scale: f64,
+}
+
+/// The jump targets of `data`: every up-sweep curve with a measured jump
+/// (an amplitude ratio above 2 between consecutive steps).
+pub fn jump_targets(data: &Dataset) -> Vec<JumpTarget> {
+    data.curves
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.direction == SweepDirection::Up)
+        .filter_map(|(i, c)| {
+            let omega = c.measured_jump(2.0)?;
+            let peak = c.amplitudes.iter().fold(0.0f64, |m, &a| m.max(a)) / c.gamma;
+            Some(JumpTarget {
+                curve: i,
+                omega,
+                scale: (c.omegas.len() as f64).sqrt() * peak,
+            })
+        })
+        .collect()
+}
+
+/// Phase-quadrature frequency `Ω_pq` (rad/s) of the model θ at input
+/// `gain·gamma`, and `dΩ_pq/dθ` (module docs). `None` if the curve never
+/// meets the backbone or the 2 × 2 system is singular.
+pub fn quadrature_frequency(
+    theta: &[f64; N_PARAMS],
+    gamma: f64,
+) -> Result<Option<(f64, [f64; N_PARAMS])>, SolveError> {
+    let r = ForcedResponse::from_normalised(
+        &normalised_model(theta),
+        theta[GAIN] * gamma,
+        Formulation::HarmonicBalance,
+    )?;
+    let Some(pq) = r.phase_quadrature()? else {
+        return Ok(None);
+    };
+    let (w, a) = (pq.omega, pq.amplitude);
+    let (beta, rho, kappa, eta, gain) = (
+        theta[BETA],
+        theta[RHO],
+        theta[KAPPA],
+        theta[ETA],
+        theta[GAIN],
+    );
+    let la = a.ln();
+    let lwa = (w * a).ln();
+    let (gr, ar) = if beta != 0.0 {
+        (g_unchecked(rho), (rho * la).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let (ge, wae) = if kappa != 0.0 {
+        (g_unchecked(eta), (eta * lwa).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let k = ge * kappa * wae;
+    let d = theta[DELTA] + k;
+    // ∂G/∂(a, Ω)
+    let g1a = if beta != 0.0 {
+        rho * gr * beta * ar / a
+    } else {
+        0.0
+    };
+    let g1w = -2.0 * w;
+    let g2a = w * (d + eta * k);
+    let g2w = a * (d + eta * k);
+    let det = g1a * g2w - g1w * g2a;
+    if !(det.is_finite() && det != 0.0) {
+        return Ok(None);
+    }
+    let mut g1 = [0.0; N_PARAMS];
+    let mut g2 = [0.0; N_PARAMS];
+    g1[ALPHA] = 1.0;
+    if beta != 0.0 {
+        g1[BETA] = gr * ar;
+        g1[RHO] = beta * ar * (g_derivative(rho) + gr * la);
+    }
+    g2[DELTA] = a * w;
+    if kappa != 0.0 {
+        g2[KAPPA] = a * w * ge * wae;
+        g2[ETA] = a * w * kappa * wae * (g_derivative(eta) + ge * lwa);
+    }
+    g2[GAIN] = -gamma;
+    let _ = gain;
+    // [g1a g1w; g2a g2w] (da, dΩ) = −(g1, g2)  ⇒  dΩ = −(g1a g2 − g2a g1)/det
+    let mut dw = [0.0; N_PARAMS];
+    for j in 0..N_PARAMS {
+        dw[j] = -(g1a * g2[j] - g2a * g1[j]) / det;
+    }
+    Ok(Some((w, dw)))
+}
+
+/// `dΩ_f/dθ` at a fold `(a_f, Ω_f)` of the response curve at input
+/// `gain·gamma`: there `F = 0` and `∂F/∂a = 0`, so
+/// `dΩ_f/dθ = −(∂F/∂θ)/(∂F/∂Ω)` with (both divided by `2a²`, notation of
+/// [`super::objective`])
+///
+/// ```text
+/// ∂F/∂Ω /(2a²) = Ω (D² + η D k − 2S),   k = g(η)κ(Ωa)^η
+/// ```
+///
+/// and `∂F/∂θ /(2a²)` as in the amplitude derivatives. `None` if
+/// `∂F/∂Ω = 0`.
+pub fn fold_frequency_derivatives(
+    theta: &[f64; N_PARAMS],
+    gamma: f64,
+    omega: f64,
+    a: f64,
+) -> Option<[f64; N_PARAMS]> {
+    let (alpha, delta, beta, rho, kappa, eta, gain) = (
+        theta[ALPHA],
+        theta[DELTA],
+        theta[BETA],
+        theta[RHO],
+        theta[KAPPA],
+        theta[ETA],
+        theta[GAIN],
+    );
+    let w2 = omega * omega;
+    let la = a.ln();
+    let lwa = (omega * a).ln();
+    let (gr, ar) = if beta != 0.0 {
+        (g_unchecked(rho), (rho * la).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let (ge, wae) = if kappa != 0.0 {
+        (g_unchecked(eta), (eta * lwa).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let k = ge * kappa * wae;
+    let s = alpha + gr * beta * ar - w2;
+    let d = delta + k;
+    let fw = omega * (d * d + eta * d * k - 2.0 * s);
+    if !(fw.is_finite() && fw != 0.0) {
+        return None;
+    }
+    let mut h = [0.0; N_PARAMS];
+    h[ALPHA] = s;
+    h[DELTA] = w2 * d;
+    if beta != 0.0 {
+        h[BETA] = s * gr * ar;
+        h[RHO] = s * beta * ar * (g_derivative(rho) + gr * la);
+    }
+    if kappa != 0.0 {
+        h[KAPPA] = w2 * d * ge * wae;
+        h[ETA] = w2 * d * kappa * wae * (g_derivative(eta) + ge * lwa);
+    }
+    h[GAIN] = -gain * gamma * gamma / (a * a);
+    let mut out = [0.0; N_PARAMS];
+    for j in 0..N_PARAMS {
+        out[j] = -h[j] / fw;
+    }
+    Some(out)
+}
+
+/// Eq 31 plus the jump residuals (module docs), weight `λ`, in the
+/// optimisation variables of [`Problem`]. A curve whose model never meets
+/// the backbone makes θ not evaluable.
+#[derive(Debug, Clone)]
+pub struct WithJumps<'a> {
+    pub problem: Problem<'a>,
+    pub targets: Vec<JumpTarget>,
+    /// λ ≥ 0.
+    pub weight: f64,
+}
+
+impl<'a> WithJumps<'a> {
+    pub fn new(problem: Problem<'a>, weight: f64) -> Self {
+        let targets = jump_targets(problem.data);
+        Self {
+            problem,
+            targets,
+            weight,
+        }
+    }
+
+    /// The model's predicted jump of target `t` at θ: the first jump of the
+    /// curve's model sweep (its fold frequency) with `dΩ_f/dθ`, or, where
+    /// the model sweep does not jump, the phase-quadrature frequency with
+    /// its derivative (module docs).
+    pub fn predicted(
+        &self,
+        theta: &[f64; N_PARAMS],
+        t: &JumpTarget,
+    ) -> Option<(f64, [f64; N_PARAMS])> {
+        let c = &self.problem.data.curves[t.curve];
+        let r = ForcedResponse::from_normalised(
+            &normalised_model(theta),
+            theta[GAIN] * c.gamma,
+            Formulation::HarmonicBalance,
+        )
+        .ok()?;
+        let sw = r
+            .sweep_from(&c.omegas, c.direction, super::objective::first_amplitude(c))
+            .ok()?;
+        match sw.jumps.first() {
+            Some(j) => fold_frequency_derivatives(theta, c.gamma, j.omega, j.amplitude_before)
+                .map(|d| (j.omega, d)),
+            None => quadrature_frequency(theta, c.gamma).ok()?,
+        }
+    }
+
+    /// Jump residuals and (if `jacobian`) their rows `∂r/∂θ` at θ.
+    pub fn jump_residuals(
+        &self,
+        theta: &[f64; N_PARAMS],
+        jacobian: bool,
+    ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
+        let sw = self.weight.sqrt();
+        let mut r = Vec::with_capacity(self.targets.len());
+        let mut j = Vec::new();
+        for t in &self.targets {
+            let (w, dw) = self.predicted(theta, t)?;
+            let f = sw * t.scale / t.omega;
+            r.push(f * (w - t.omega));
+            if jacobian {
+                let mut row = dw;
+                for v in row.iter_mut() {
+                    *v *= f;
+                }
+                j.push(row);
+            }
+        }
+        Some((r, j))
+    }
+
+    /// Predicted/measured − 1 per target (for reports).
+    pub fn relative_errors(&self, theta: &[f64; N_PARAMS]) -> Vec<Option<f64>> {
+        self.targets
+            .iter()
+            .map(|t| self.predicted(theta, t).map(|(w, _)| w / t.omega - 1.0))
+            .collect()
+    }
+}
+
+impl LeastSquares for WithJumps<'_> {
+    fn n_params(&self) -> usize {
+        self.problem.free.len()
+    }
+
+    fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
+        let mut r = self.problem.residuals(u)?;
+        let th = self.problem.theta(u);
+        let (rj, _) = self.jump_residuals(&th, false)?;
+        r.extend(rj);
+        r.iter().all(|v| v.is_finite()).then_some(r)
+    }
+
+    fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (mut r, mut j) = self.problem.residuals_and_jacobian(u)?;
+        let th = self.problem.theta(u);
+        let (rj, jj) = self.jump_residuals(&th, true)?;
+        let cols = self.problem.dtheta_du(&th);
+        for row in &jj {
+            for col in &cols {
+                let s: f64 = (0..N_PARAMS)
+                    .filter(|&p| col[p] != 0.0)
+                    .map(|p| row[p] * col[p])
+                    .sum();
+                j.push(if s.is_finite() { s } else { 0.0 });
+            }
+        }
+        r.extend(rj);
+        r.iter().all(|v| v.is_finite()).then_some((r, j))
+    }
+}
+
+/// Eq 31 cost alone at θ (for reporting a jump-weighted fit).
+pub fn eq31_cost(data: &Dataset, theta: &[f64; N_PARAMS]) -> Result<f64, SolveError> {
+    Ok(evaluate(data, theta, false)?.cost())
+}

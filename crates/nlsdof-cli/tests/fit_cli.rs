@@ -134,6 +134,62 @@ fn fit_errors_are_one_line_and_leave_no_file() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+    for (extra, want) in [
+        (&["--jump-weight=-1"][..], "--jump-weight -1"),
+        (&["--jump-weight", "NaN"][..], "--jump-weight NaN"),
+        (&["--jump-weight", "1", "--integer"][..], "--integer"),
+    ] {
+        let o = Command::cargo_bin("nlsdof")
+            .unwrap()
+            .args(["fit", csv.to_str().unwrap(), "--out"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.trim_end().lines().count() == 1 && err.contains(want),
+            "{extra:?}: {err}"
+        );
+        assert!(!out.exists());
+    }
+}
+
+/// `--jump-weight` on data with a jump: the fit runs, reports the weight,
+/// and the jump-weighted optimum cannot have a lower Eq 31 cost than the
+/// plain fit from the same single start (it trades Eq 31 for the jump).
+#[test]
+fn jump_weight_option_runs_and_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, _) = write_csv(dir.path());
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let o = Command::cargo_bin("nlsdof")
+            .unwrap()
+            .args([
+                "fit",
+                csv.to_str().unwrap(),
+                "--model",
+                "duffing",
+                "--starts",
+                "1",
+                "--json",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let plain = run(&[]);
+    let jumped = run(&["--jump-weight", "10"]);
+    assert_eq!(plain["jump_weight"], 0.0);
+    assert_eq!(jumped["jump_weight"], 10.0);
+    let (c0, c1) = (
+        plain["cost"].as_f64().unwrap(),
+        jumped["cost"].as_f64().unwrap(),
+    );
+    assert!(c1.is_finite() && c1 >= c0 * (1.0 - 1e-9), "{c0} {c1}");
 }
 
 #[test]

@@ -470,17 +470,17 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
     }))
 }
 
-/// Human-readable report of one fit.
-pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
-    let mut s = String::new();
+/// The parameter block shared by the sweep and phase-resonance fit reports:
+/// a note when no mass is given, one line per parameter (status, value,
+/// standard error, 95 % interval, physical value) and `f_n`, `zeta`.
+pub fn parameter_table_text(
+    s: &mut String,
+    theta: &[f64; N_PARAMS],
+    status: &[Status; N_PARAMS],
+    unc: Option<&nlsdof::identification::uncertainty::Uncertainty>,
+    mass: Option<f64>,
+) {
     let m = mass.unwrap_or(1.0);
-    writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
-    writeln!(
-        s,
-        "termination: {} after {} iterations",
-        res.termination, res.iterations
-    )
-    .ok();
     if mass.is_none() {
         writeln!(
             s,
@@ -495,16 +495,16 @@ pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
     )
     .ok();
     for j in 0..N_PARAMS {
-        if res.status[j] == Status::Absent {
+        if status[j] == Status::Absent {
             continue;
         }
-        let unc = res.uncertainty.as_ref().and_then(|u| {
+        let u_k = unc.and_then(|u| {
             u.names
                 .iter()
                 .position(|n| *n == PARAM_NAMES[j])
                 .map(|k| (u, k))
         });
-        let (se, ci) = match unc {
+        let (se, ci) = match u_k {
             Some((u, k)) => (
                 format!("{:.4e}", u.std_errors[k]),
                 format!("[{:.6e}, {:.6e}]", u.lower[k], u.upper[k]),
@@ -512,16 +512,16 @@ pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
             None => ("-".into(), "-".into()),
         };
         let phys = if matches!(j, ALPHA | DELTA | BETA | KAPPA) {
-            res.theta[j] * m
+            theta[j] * m
         } else {
-            res.theta[j]
+            theta[j]
         };
         writeln!(
             s,
             "{:<6} {:>7} {:>15.8e} {:>12} {:>33}   {} = {:.8e} {}",
             PARAM_NAMES[j],
-            status_name(res.status[j]),
-            res.theta[j],
+            status_name(status[j]),
+            theta[j],
             se,
             ci,
             PHYS[j].0,
@@ -530,14 +530,33 @@ pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         )
         .ok();
     }
-    let wn = res.theta[ALPHA].sqrt();
+    let wn = theta[ALPHA].sqrt();
     writeln!(
         s,
         "f_n = {:.6} Hz, zeta = {:.6e}",
         hz(wn),
-        res.theta[DELTA] / (2.0 * wn)
+        theta[DELTA] / (2.0 * wn)
     )
     .ok();
+}
+
+/// Human-readable report of one fit.
+pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
+    let mut s = String::new();
+    writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
+    writeln!(
+        s,
+        "termination: {} after {} iterations",
+        res.termination, res.iterations
+    )
+    .ok();
+    parameter_table_text(
+        &mut s,
+        &res.theta,
+        &res.status,
+        res.uncertainty.as_ref(),
+        mass,
+    );
     if res.uncertainty.is_none() {
         writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
     }

@@ -348,7 +348,6 @@ pub fn pr_table_text(res: &PrFitResult) -> String {
 /// Human-readable report of one phase-resonance fit.
 pub fn pr_text(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> String {
     let mut s = String::new();
-    let m = mass.unwrap_or(1.0);
     writeln!(
         s,
         "model {} from phase-resonance points: cost = {:.6e}, RMS = {:.6e} s^2, {} levels ({} residuals), {} free parameters",
@@ -373,63 +372,13 @@ pub fn pr_text(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> S
         res.termination, res.iterations
     )
     .ok();
-    if mass.is_none() {
-        writeln!(
-            s,
-            "note: no mass given (--mass); physical values are per unit mass (m = 1 kg)"
-        )
-        .ok();
-    }
-    writeln!(
-        s,
-        "{:<6} {:>7} {:>15} {:>12} {:>33}   {}",
-        "param", "status", "value", "std error", "95 % interval", "physical"
-    )
-    .ok();
-    for j in 0..N_PARAMS {
-        if res.status[j] == Status::Absent {
-            continue;
-        }
-        let unc = res.uncertainty.as_ref().and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == PARAM_NAMES[j])
-                .map(|k| (u, k))
-        });
-        let (se, ci) = match unc {
-            Some((u, k)) => (
-                format!("{:.4e}", u.std_errors[k]),
-                format!("[{:.6e}, {:.6e}]", u.lower[k], u.upper[k]),
-            ),
-            None => ("-".into(), "-".into()),
-        };
-        let phys = if mass_scaled(j) {
-            res.theta[j] * m
-        } else {
-            res.theta[j]
-        };
-        writeln!(
-            s,
-            "{:<6} {:>7} {:>15.8e} {:>12} {:>33}   {} = {:.8e} {}",
-            PARAM_NAMES[j],
-            status_name(res.status[j]),
-            res.theta[j],
-            se,
-            ci,
-            PHYS[j].0,
-            phys,
-            PHYS[j].1
-        )
-        .ok();
-    }
-    let wn = res.theta[ALPHA].sqrt();
-    writeln!(
-        s,
-        "f_n = {:.6} Hz, zeta = {:.6e}",
-        hz(wn),
-        res.theta[DELTA] / (2.0 * wn)
-    )
-    .ok();
+    super::fit::parameter_table_text(
+        &mut s,
+        &res.theta,
+        &res.status,
+        res.uncertainty.as_ref(),
+        mass,
+    );
     if res.uncertainty.is_none() {
         writeln!(
             s,

@@ -56,7 +56,7 @@ fn draw_err<E: std::fmt::Display>(e: E) -> CliError {
 }
 
 /// Viridis (matplotlib), 9 anchors, linear interpolation; `u` in [0, 1].
-fn viridis(u: f64) -> [u8; 3] {
+pub(crate) fn viridis(u: f64) -> [u8; 3] {
     const A: [[f64; 3]; 9] = [
         [68.0, 1.0, 84.0],
         [71.0, 44.0, 122.0],
@@ -194,7 +194,7 @@ fn db_label(s: Scaling) -> &'static str {
     }
 }
 
-fn encode_png(buf: &[u8], w: u32, h: u32) -> Result<Vec<u8>, CliError> {
+pub(crate) fn encode_png(buf: &[u8], w: u32, h: u32) -> Result<Vec<u8>, CliError> {
     use image::ImageEncoder;
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out)

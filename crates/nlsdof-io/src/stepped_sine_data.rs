@@ -208,7 +208,10 @@ fn decimal_comma(s: &str) -> Option<f64> {
     s.trim().replace(',', ".").parse().ok()
 }
 
-/// Records of one beam file (velocity amplitudes converted to displacement).
+/// Records of one beam file (velocity amplitudes converted to displacement;
+/// phases in rad as measured, in the instrument's convention — see
+/// `nlsdof::identification::equation_error` for how the convention is
+/// detected).
 pub fn parse_beam_file(
     text: &str,
     path: &Path,
@@ -241,12 +244,16 @@ pub fn parse_beam_file(
         let mut push =
             |col: usize, dir: SweepDirection, name: &str| -> Result<(), SteppedSineDataError> {
                 let v = num(col, name)?;
+                // the phase as measured (the vibrometer's convention, velocity
+                // against its reference channel): the identification detects
+                // the sign and offset from the data
+                let ph = num(col + 1, "phase")?;
                 recs.push(Record {
                     level: label.clone(),
                     gamma,
                     omega,
                     amplitude: v / omega,
-                    phase: None,
+                    phase: Some(ph.to_radians()),
                     direction: dir,
                     weight: 1.0,
                 });

@@ -5,8 +5,9 @@
 use crate::error::CliError;
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{
-    fit, integer_search, phase_quadrature_table, predicted_jumps, Dataset, FitOptions, FitResult,
-    FitSpec, ModelKind, Status, N_PARAMS, PARAM_NAMES,
+    fit, identify, integer_search, phase_quadrature_table, predicted_jumps, Dataset, FitOptions,
+    FitPlan, FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind,
+    PhaseChoice, PhaseConvention, SignChoice, Status, N_PARAMS, PARAM_NAMES,
 };
 use nlsdof::{Model, SweepDirection};
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
@@ -92,6 +93,19 @@ impl DataArgs {
         };
         read_csv(path, &opts).map_err(err)
     }
+
+    /// As [`Self::load`], with the phases dropped where they are not
+    /// displacement lags (the beam files' raw instrument phases), for the
+    /// fits that read phases as lags without detecting the convention.
+    pub fn load_lag_phases(&self) -> Result<Dataset, CliError> {
+        let mut d = self.load()?;
+        if self.beam_dir.is_some() {
+            for c in &mut d.curves {
+                c.phases = None;
+            }
+        }
+        Ok(d)
+    }
 }
 
 #[derive(clap::Args)]
@@ -115,9 +129,31 @@ pub struct Args {
     /// Exponents restricted to integers: every integer pair in the bounds is fitted.
     #[arg(long)]
     pub integer: bool,
-    /// Number of global-search starts (1 = local fit from the data-derived start).
-    #[arg(long, default_value_t = 32)]
+    /// Extra global-search starts (Latin hypercube) per refined landscape candidate
+    /// (1 = none: the local fit from the equation-error start). With --integer or
+    /// --sign auto: starts of the classic multistart.
+    #[arg(long, default_value_t = 1)]
     pub starts: usize,
+    /// Do not use the phase columns (default: used when every curve has phases, with
+    /// the phase convention detected from the data).
+    #[arg(long = "no-phase")]
+    pub no_phase: bool,
+    /// State the phase convention instead of detecting it: lag|lead,OFFSET_DEG[,DELAY_S]
+    /// (measured phase = +-lag + offset + 2 pi f delay).
+    #[arg(long = "phase-convention", value_name = "lag|lead,OFFSET_DEG[,DELAY_S]", allow_hyphen_values = true)]
+    pub phase_convention: Option<String>,
+    /// Weight of the phase residuals relative to the amplitude residuals.
+    #[arg(long = "phase-weight", value_name = "W", default_value_t = 1.0)]
+    pub phase_weight: f64,
+    /// Write the exponent landscape: FILE.json (grid), FILE.svg or FILE.png (heat map).
+    #[arg(long, value_name = "FILE")]
+    pub landscape: Option<PathBuf>,
+    /// Landscape grid: N (N x N) or NxM (rho nodes x eta nodes), each 1..=512.
+    #[arg(long, value_name = "N[xM]", default_value = "41")]
+    pub grid: String,
+    /// Landscape minima refined by output error (Eq 31).
+    #[arg(long, value_name = "K", default_value_t = 3)]
+    pub refine: usize,
     /// Seed of the Latin-hypercube starts.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -315,12 +351,13 @@ pub fn apply_fix_free(
     Ok(mass)
 }
 
-/// Applies a bounds TOML file (`name = [min, max]`).
-pub fn apply_bounds(spec: &mut FitSpec, path: &Path) -> Result<(), CliError> {
+/// Reads a bounds TOML file (`name = [min, max]`).
+pub fn parse_bounds(path: &Path) -> Result<Vec<(String, f64, f64)>, CliError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| CliError::Usage(format!("cannot read {}: {e}", path.display())))?;
     let table: toml::Table = toml::from_str(&text)
         .map_err(|e| CliError::Usage(format!("{}: {}", path.display(), e.message())))?;
+    let mut out = Vec::new();
     for (name, v) in table {
         let arr = v.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
             CliError::Usage(format!("{}: {name} must be [min, max]", path.display()))
@@ -335,10 +372,265 @@ pub fn apply_bounds(spec: &mut FitSpec, path: &Path) -> Result<(), CliError> {
                 )))
             }
         };
+        out.push((name, lo, hi));
+    }
+    Ok(out)
+}
+
+/// Applies a bounds TOML file (`name = [min, max]`).
+pub fn apply_bounds(spec: &mut FitSpec, path: &Path) -> Result<(), CliError> {
+    for (name, lo, hi) in parse_bounds(path)? {
         spec.set_bounds(&name, lo, hi)
             .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
     }
     Ok(())
+}
+
+/// `--grid N` or `--grid NxM`.
+pub fn parse_grid(s: &str) -> Result<(usize, usize), CliError> {
+    let bad = || {
+        CliError::Usage(format!(
+            "--grid '{s}' is not allowed: use N or NxM with 1 <= N, M <= 512 (landscape nodes of rho x eta)"
+        ))
+    };
+    let (a, b) = match s.split_once(['x', 'X']) {
+        Some((a, b)) => (a, b),
+        None => (s, s),
+    };
+    let n: usize = a.trim().parse().map_err(|_| bad())?;
+    let m: usize = b.trim().parse().map_err(|_| bad())?;
+    if n == 0 || m == 0 || n > 512 || m > 512 {
+        return Err(bad());
+    }
+    Ok((n, m))
+}
+
+/// `--phase-convention lag|lead,OFFSET_DEG[,DELAY_S]`.
+pub fn parse_phase_convention(s: &str) -> Result<PhaseConvention, CliError> {
+    let bad = |why: &str| {
+        CliError::Usage(format!(
+            "--phase-convention '{s}': {why} (expected lag|lead,OFFSET_DEG[,DELAY_S])"
+        ))
+    };
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() < 2 || parts.len() > 3 {
+        return Err(bad("need 2 or 3 fields"));
+    }
+    let sign = match parts[0].to_ascii_lowercase().as_str() {
+        "lag" => 1.0,
+        "lead" => -1.0,
+        _ => return Err(bad("first field must be lag or lead")),
+    };
+    let offset: f64 = parts[1].parse().map_err(|_| bad("offset is not a number"))?;
+    let delay: f64 = match parts.get(2) {
+        Some(d) => d.parse().map_err(|_| bad("delay is not a number"))?,
+        None => 0.0,
+    };
+    if !(offset.is_finite() && offset.abs() <= 360.0) {
+        return Err(bad("offset must be finite, within [-360, 360] degrees"));
+    }
+    if !(delay.is_finite() && delay.abs() < 1.0) {
+        return Err(bad("delay must be finite, |delay| < 1 s"));
+    }
+    Ok(PhaseConvention {
+        sign,
+        offset: offset.to_radians(),
+        delay,
+    })
+}
+
+/// The fit plan of the CLI options (`--fix`, `--free`, `--bounds`, sign,
+/// phase, jumps, landscape grid); returns the mass given with `--fix m=..`.
+pub fn plan_from_args(
+    args: &Args,
+    kind: ModelKind,
+    sign: super::phase_resonance::SignArg,
+) -> Result<(FitPlan, Option<f64>), CliError> {
+    use super::phase_resonance::SignArg;
+    let mut plan = FitPlan::new(kind);
+    // validate names and values exactly as the spec does
+    let mut probe = FitSpec::new(kind, &dummy_dataset());
+    let mass = apply_fix_free(&mut probe, args.fix.as_deref(), args.free.as_deref())?;
+    if let Some(list) = &args.fix {
+        for item in list.split(',').filter(|s| !s.trim().is_empty()) {
+            let (name, value) = item.split_once('=').expect("checked");
+            let n = name.trim().to_ascii_lowercase();
+            let v: f64 = value.trim().parse().expect("checked");
+            match n.as_str() {
+                "m" | "mass" => {}
+                "gain" => plan.gain = GainChoice::Fixed(v),
+                _ => plan.fix.push((n, v)),
+            }
+        }
+    }
+    if let Some(list) = &args.free {
+        for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+            let n = name.trim().to_ascii_lowercase();
+            if n == "gain" {
+                plan.gain = GainChoice::Free;
+            } else {
+                plan.free.push(n);
+            }
+        }
+    }
+    if let Some(b) = &args.bounds {
+        apply_bounds(&mut probe, b)?;
+        plan.bounds = parse_bounds(b)?;
+    }
+    plan.sign = match sign {
+        SignArg::Data | SignArg::Auto => SignChoice::Auto,
+        SignArg::Hardening => SignChoice::Hardening,
+        SignArg::Softening => SignChoice::Softening,
+    };
+    if args.no_phase && args.phase_convention.is_some() {
+        return Err(CliError::Usage(
+            "--no-phase conflicts with --phase-convention".into(),
+        ));
+    }
+    plan.phase = if args.no_phase {
+        PhaseChoice::Ignore
+    } else if let Some(c) = &args.phase_convention {
+        PhaseChoice::Known(parse_phase_convention(c)?)
+    } else {
+        PhaseChoice::Auto
+    };
+    if !(args.phase_weight.is_finite() && args.phase_weight > 0.0) {
+        return Err(CliError::Usage(format!(
+            "--phase-weight {} is not allowed: use a finite value > 0",
+            args.phase_weight
+        )));
+    }
+    plan.phase_weight = args.phase_weight;
+    plan.jumps = match args.jump_weight {
+        None => JumpChoice::Auto,
+        Some(l) if l == 0.0 => JumpChoice::Off,
+        Some(l) => JumpChoice::Weight(l),
+    };
+    plan.grid = parse_grid(&args.grid)?;
+    if args.refine == 0 || args.refine > 100 {
+        return Err(CliError::Usage(format!(
+            "--refine {} is not allowed: use 1..=100",
+            args.refine
+        )));
+    }
+    plan.refine = args.refine;
+    plan.starts = args.starts;
+    plan.seed = args.seed;
+    Ok((plan, mass))
+}
+
+/// A tiny valid data set, only to validate `--fix`/`--free`/`--bounds`
+/// names and values before the real data are read.
+fn dummy_dataset() -> Dataset {
+    let recs: Vec<nlsdof::identification::Record> = (0..3)
+        .map(|i| nlsdof::identification::Record {
+            level: "1".into(),
+            gamma: 1.0,
+            omega: 1.0 + i as f64,
+            amplitude: 1.0,
+            phase: None,
+            direction: SweepDirection::Up,
+            weight: 1.0,
+        })
+        .collect();
+    Dataset::from_records(&recs).expect("valid dummy data")
+}
+
+/// JSON of the stages of [`identify`] (equation error, landscape,
+/// phase convention, gain decision, candidates).
+pub fn identification_json(id: &Identification) -> Value {
+    let l = &id.landscape;
+    let minima: Vec<Value> = l
+        .minima
+        .iter()
+        .take(20)
+        .map(|&(i, j)| json!({"rho": l.rho[i], "eta": l.eta[j], "cost": l.at(i, j)}))
+        .collect();
+    let prof = |p: Option<nlsdof::identification::landscape::ProfileInterval>| {
+        p.map(|p| json!([p.lower, p.upper]))
+    };
+    json!({
+        "equation_error": {"theta": id.equation_error.theta, "cost": id.equation_error.cost,
+                            "residuals": id.equation_error.n_residuals},
+        "landscape": {"rho": [l.rho.first(), l.rho.last(), l.rho.len()],
+                      "eta": [l.eta.first(), l.eta.last(), l.eta.len()],
+                      "with_phase": l.with_phase, "minima": minima},
+        "profile_ci95": {"rho": prof(id.rho_profile), "eta": prof(id.eta_profile),
+                         "note": "profile likelihood of the equation-error cost over the landscape grid; null bound = open at the grid edge"},
+        "phase_convention": id.phase.map(|p| json!({
+            "sign": if p.sign > 0.0 { "lag" } else { "lead" },
+            "offset_deg": p.offset.to_degrees(), "delay_s": p.delay})),
+        "gain_test": id.gain_test.map(|g| json!({"gain": g.gain, "f_statistic": g.f_statistic, "freed": g.freed})),
+        "jump_weight": id.jump_weight,
+        "candidates": id.candidates.iter().map(|c| json!({
+            "rho": c.rho, "eta": c.eta, "ee_cost": c.ee_cost, "sign": c.sign.name(),
+            "objective": c.oe.as_ref().ok(), "error": c.oe.as_ref().err()})).collect::<Vec<_>>(),
+    })
+}
+
+/// Text lines of the stages of [`identify`].
+pub fn identification_text(id: &Identification) -> String {
+    let mut s = String::new();
+    let l = &id.landscape;
+    writeln!(
+        s,
+        "stages: equation error ({}) -> landscape {}x{} (rho {:.3}..{:.3}, eta {:.3}..{:.3}), {} grid minima -> output error from the best {}",
+        if l.with_phase { "amplitude and phase" } else { "amplitude" },
+        l.rho.len(),
+        l.eta.len(),
+        l.rho[0],
+        l.rho[l.rho.len() - 1],
+        l.eta[0],
+        l.eta[l.eta.len() - 1],
+        l.minima.len(),
+        id.candidates.len()
+    )
+    .ok();
+    if let Some(p) = id.phase {
+        writeln!(
+            s,
+            "phase convention: {} + {:.2} deg{} (measured phase = {}displacement lag + offset)",
+            if p.sign > 0.0 { "lag" } else { "lead" },
+            p.offset.to_degrees(),
+            if p.delay != 0.0 {
+                format!(" + delay {:.3e} s", p.delay)
+            } else {
+                String::new()
+            },
+            if p.sign > 0.0 { "" } else { "-" }
+        )
+        .ok();
+    }
+    if let Some(g) = id.gain_test {
+        writeln!(
+            s,
+            "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {})",
+            if g.freed { "free" } else { "held at 1" },
+            g.gain,
+            g.f_statistic,
+            nlsdof::identification::identify::GAIN_F_THRESHOLD
+        )
+        .ok();
+    }
+    if id.jump_weight > 0.0 {
+        writeln!(s, "jump residuals: lambda = {}", id.jump_weight).ok();
+    }
+    let f = |p: Option<nlsdof::identification::landscape::ProfileInterval>| {
+        p.map(|p| {
+            format!(
+                "[{}, {}]",
+                p.lower.map_or("open".into(), |v| format!("{v:.3}")),
+                p.upper.map_or("open".into(), |v| format!("{v:.3}"))
+            )
+        })
+    };
+    if let Some(r) = f(id.rho_profile) {
+        writeln!(s, "profile 95 % interval (equation error) rho: {r}").ok();
+    }
+    if let Some(e) = f(id.eta_profile) {
+        writeln!(s, "profile 95 % interval (equation error) eta: {e}").ok();
+    }
+    s
 }
 
 pub fn parse_model_kind(name: &str) -> Result<ModelKind, CliError> {
@@ -395,11 +687,12 @@ const PHYS: [(&str, &str); N_PARAMS] = [
 /// JSON of one fit.
 pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<Value, CliError> {
     let mut params = Vec::new();
+    let valid = res.intervals_valid();
     for j in 0..N_PARAMS {
         if res.status[j] == Status::Absent {
             continue;
         }
-        let unc = res.uncertainty.as_ref().and_then(|u| {
+        let unc = res.uncertainty.as_ref().filter(|_| valid).and_then(|u| {
             u.names
                 .iter()
                 .position(|n| *n == PARAM_NAMES[j])
@@ -452,6 +745,12 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         .collect();
     Ok(json!({
         "model": res.kind.name(),
+        "converged": res.converged,
+        "at_bounds": res.at_bounds,
+        "unidentifiable": res.unidentifiable,
+        "intervals_valid": valid,
+        "warning": res.warning(),
+        "phase_cost": res.phase_cost,
         "parameters": params,
         "parameter_order": PARAM_NAMES,
         "theta": res.theta,
@@ -463,7 +762,7 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         "points": res.n_points, "free_parameters": res.n_free,
         "termination": res.termination.name(),
         "iterations": res.iterations,
-        "correlation": res.uncertainty.as_ref().map(|u| json!({"names": u.names, "matrix": u.correlation})),
+        "correlation": res.uncertainty.as_ref().filter(|_| valid).map(|u| json!({"names": u.names, "matrix": u.correlation})),
         "minima": minima,
         "levels": levels,
         "phase_quadrature": pq,
@@ -543,6 +842,9 @@ pub fn parameter_table_text(
 /// Human-readable report of one fit.
 pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
     let mut s = String::new();
+    if let Some(w) = res.warning() {
+        writeln!(s, "{w}").ok();
+    }
     writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
     writeln!(
         s,
@@ -554,10 +856,12 @@ pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         &mut s,
         &res.theta,
         &res.status,
-        res.uncertainty.as_ref(),
+        res.uncertainty.as_ref().filter(|_| res.intervals_valid()),
         mass,
     );
-    if res.uncertainty.is_none() {
+    if res.uncertainty.is_some() && !res.intervals_valid() {
+        writeln!(s, "intervals: not shown (the fit is not trustworthy, see the first line)").ok();
+    } else if res.uncertainty.is_none() {
         writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
     }
     let jumps = predicted_jumps(data, &res.theta)?;
@@ -661,6 +965,89 @@ pub fn resolve_mass(
     Ok(None)
 }
 
+/// The default fit: [`identify`] (equation error, landscape, output error).
+fn run_identify(
+    args: &Args,
+    kind: ModelKind,
+    sign: super::phase_resonance::SignArg,
+) -> Result<(), CliError> {
+    let (plan, fix_mass) = plan_from_args(args, kind, sign)?;
+    let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
+    if args.starts == 0 || args.starts > 100_000 {
+        return Err(CliError::Usage(format!(
+            "--starts {} is not allowed: use 1..=100000",
+            args.starts
+        )));
+    }
+    let landscape_kind = match &args.landscape {
+        None => None,
+        Some(p) => Some(super::landscape_plot::kind_of(p)?),
+    };
+    let data = args.data.load()?;
+    let pb = progress_bar(plan.refine * plan.starts.max(1), kind.name());
+    let id = identify(&data, &plan, &|| pb.inc(1));
+    pb.finish_and_clear();
+    let id = id.map_err(|e| CliError::Usage(e.to_string()))?;
+    let res = &id.fit;
+    // render everything first, then commit the files
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    if let Some(out) = &args.out {
+        let m = mass.unwrap_or(1.0);
+        let model = physical(res, m)?;
+        let mut text = format!(
+            "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
+            res.kind,
+            res.cost,
+            if res.warning().is_some() { " (NOT CONVERGED or not identifiable: see the fit report)" } else { "" },
+            res.theta[GAIN]
+        );
+        if mass.is_none() {
+            text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
+        }
+        text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
+        files.push((out.clone(), text.into_bytes()));
+    }
+    if let Some(p) = &args.plot {
+        files.push((p.clone(), fit_svg(&id.data, res).into_bytes()));
+    }
+    if let (Some(p), Some(k)) = (&args.landscape, landscape_kind) {
+        files.push((p.clone(), super::landscape_plot::render(&id, k)?));
+    }
+    for (i, (p, _)) in files.iter().enumerate() {
+        if files[..i].iter().any(|(q, _)| q == p) {
+            return Err(CliError::Usage(format!(
+                "{} is given for two outputs",
+                p.display()
+            )));
+        }
+    }
+    for (p, bytes) in &files {
+        nlsdof_io::atomic::write_atomic(p, bytes)?;
+    }
+    if args.json {
+        let mut v = result_json(&id.data, res, mass)?;
+        if res.status[BETA] != Status::Absent {
+            v["stiffness_sign"] = json!(if res.theta[BETA] < 0.0 {
+                "softening"
+            } else {
+                "hardening"
+            });
+        }
+        v["jump_weight"] = json!(id.jump_weight);
+        v["identification"] = identification_json(&id);
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else {
+        let mut s = String::new();
+        if let Some(w) = res.warning() {
+            writeln!(s, "{w}").ok();
+        }
+        s.push_str(&identification_text(&id));
+        s.push_str(&result_text(&id.data, res, mass)?);
+        print!("{s}");
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), CliError> {
     use super::phase_resonance::{fit_sweep_signed, sign_trials_json, sign_trials_text, SignArg};
     let sign = args.pr.sign.resolve(args.pr.softening)?;
@@ -690,8 +1077,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 .into(),
         ));
     }
-    let data = args.data.load()?;
     let kind = parse_model_kind(&args.model)?;
+    if !(args.integer || sign == SignArg::Auto) {
+        return run_identify(&args, kind, sign);
+    }
+    if args.landscape.is_some() || args.no_phase || args.phase_convention.is_some() {
+        return Err(CliError::Usage(
+            "--landscape, --no-phase and --phase-convention belong to the default staged fit, not to --integer or --sign auto".into(),
+        ));
+    }
+    let data = args.data.load_lag_phases()?;
     let mut spec = FitSpec::new_signed(
         kind,
         &data,

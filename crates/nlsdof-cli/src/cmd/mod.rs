@@ -3,6 +3,7 @@ pub mod compare;
 pub mod demo;
 pub mod equiv;
 pub mod fit;
+pub mod landscape_plot;
 pub mod frf;
 pub mod frf_estimate;
 pub mod linear_id;

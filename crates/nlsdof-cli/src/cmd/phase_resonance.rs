@@ -37,9 +37,11 @@ pub struct PrArgs {
     /// response does to the two. > 1 trusts the frequencies more.
     #[arg(long = "frequency-weight", value_name = "W", default_value_t = 1.0)]
     pub frequency_weight: f64,
-    /// Sign of the nonlinear stiffness beta: hardening (beta > 0), softening (beta < 0), or
-    /// auto (fit both, keep the lower cost, report both).
-    #[arg(long, value_enum, default_value = "hardening")]
+    /// Sign of the nonlinear stiffness beta: data (default: sweeps take the sign of the
+    /// branch-free equation-error estimate; phase-resonance points are fitted hardening),
+    /// hardening (beta > 0), softening (beta < 0), or auto (fit both, keep the lower cost,
+    /// report both).
+    #[arg(long, value_enum, default_value = "data")]
     pub sign: SignArg,
     /// Short for --sign softening.
     #[arg(long)]
@@ -49,8 +51,11 @@ pub struct PrArgs {
 /// `--sign`: sign of the fitted nonlinear stiffness.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum SignArg {
-    /// beta > 0 (default).
+    /// From the data (sweeps: sign of the equation-error estimate; phase-resonance
+    /// points: hardening).
     #[default]
+    Data,
+    /// beta > 0.
     Hardening,
     /// beta < 0.
     Softening,
@@ -63,7 +68,9 @@ impl SignArg {
     pub fn resolve(self, softening: bool) -> Result<SignArg, CliError> {
         match (softening, self) {
             (false, s) => Ok(s),
-            (true, SignArg::Hardening | SignArg::Softening) => Ok(SignArg::Softening),
+            (true, SignArg::Data | SignArg::Hardening | SignArg::Softening) => {
+                Ok(SignArg::Softening)
+            }
             (true, SignArg::Auto) => Err(CliError::Usage(
                 "--softening conflicts with --sign auto".into(),
             )),
@@ -77,7 +84,7 @@ impl SignArg {
             return vec![Sign::Hardening];
         }
         match self {
-            SignArg::Hardening => vec![Sign::Hardening],
+            SignArg::Data | SignArg::Hardening => vec![Sign::Hardening],
             SignArg::Softening => vec![Sign::Softening],
             SignArg::Auto => vec![Sign::Hardening, Sign::Softening],
         }

@@ -36,7 +36,7 @@ pub struct Curve {
     pub weights: Vec<f64>,
 }
 
-/// A validated data set: at least two levels, each curve at least three
+/// A validated data set: at least one level, each curve at least three
 /// distinct frequencies.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dataset {
@@ -193,10 +193,9 @@ impl Dataset {
                 None => groups.push((r.level.clone(), r.direction, vec![r])),
             }
         }
-        if level_gamma.len() < 2 {
-            let (level, gamma) = level_gamma.swap_remove(0);
-            return Err(DataError::SingleLevel { level, gamma });
-        }
+        // One level is accepted: the amplitude variation along one curve
+        // can separate the terms. Whether it does is checked by the
+        // equation-error stage, which names what cannot be separated.
         let mut curves = Vec::with_capacity(groups.len());
         for (level, direction, mut rows) in groups {
             rows.sort_by(|a, b| a.omega.total_cmp(&b.omega));

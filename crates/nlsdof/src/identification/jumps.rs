@@ -9,8 +9,13 @@
 //! with ratio 2) it adds
 //!
 //! ```text
-//! r_J,c = √(λ n_c) · (a_peak,c/γ_c) · (Ω_J,c(θ)/Ω_J,c,meas − 1)
+//! r_J,c = √(λ n_c) · (a_peak,c/γ_c) · dist(Ω_J,c(θ), [Ω_J,c, Ω_J,c⁺]) / Ω_J,c
 //! ```
+//!
+//! where `[Ω_J, Ω_J⁺]` is the measured step interval across which the
+//! amplitude dropped: the data place the fold anywhere inside it, so the
+//! residual is the distance of the predicted fold outside the interval
+//! (zero inside: noise-free data of the model have zero residual).
 //!
 //! * `Ω_J,c(θ)` predicted: the first jump of the model's sweep of curve c
 //!   (its fold frequency `Ω_f`, differentiable in θ, see
@@ -59,8 +64,12 @@ use crate::special::g_derivative;
 pub struct JumpTarget {
     /// Index of the curve in the data set.
     pub curve: usize,
-    /// Measured jump-down frequency Ω_J (rad/s).
+    /// Measured jump-down frequency Ω_J (rad/s): the last step on the
+    /// upper branch.
     pub omega: f64,
+    /// The next step (the first one after the jump), rad/s: the fold lies
+    /// somewhere in `[omega, omega_next]`.
+    pub omega_next: f64,
     /// `√(n_c) · a_peak/γ` (s²).
     pub scale: f64,
 }
@@ -74,10 +83,13 @@ pub fn jump_targets(data: &Dataset) -> Vec<JumpTarget> {
         .filter(|(_, c)| c.direction == SweepDirection::Up)
         .filter_map(|(i, c)| {
             let omega = c.measured_jump(2.0)?;
+            let k = c.omegas.iter().position(|&w| w == omega)?;
+            let omega_next = *c.omegas.get(k + 1)?;
             let peak = c.amplitudes.iter().fold(0.0f64, |m, &a| m.max(a)) / c.gamma;
             Some(JumpTarget {
                 curve: i,
                 omega,
+                omega_next,
                 scale: (c.omegas.len() as f64).sqrt() * peak,
             })
         })
@@ -280,9 +292,20 @@ impl<'a> WithJumps<'a> {
         for t in &self.targets {
             let (w, dw) = self.predicted(theta, t)?;
             let f = sw * t.scale / t.omega;
-            r.push(f * (w - t.omega));
+            // dead zone: a model fold anywhere inside the measured step
+            // interval [Ω_J, Ω_J,next] agrees with the data (the sweep
+            // cannot resolve it further), so the residual is the distance
+            // outside that interval
+            let (d, inside) = if w < t.omega {
+                (w - t.omega, false)
+            } else if w > t.omega_next {
+                (w - t.omega_next, false)
+            } else {
+                (0.0, true)
+            };
+            r.push(f * d);
             if jacobian {
-                let mut row = dw;
+                let mut row = if inside { [0.0; N_PARAMS] } else { dw };
                 for v in row.iter_mut() {
                     *v *= f;
                 }

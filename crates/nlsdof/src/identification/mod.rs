@@ -14,8 +14,11 @@
 //! sees the input `gain · γ` (a point on a continuous structure).
 
 pub mod data;
+pub mod equation_error;
 pub mod global;
+pub mod identify;
 pub mod jumps;
+pub mod landscape;
 pub mod levenberg_marquardt;
 pub mod models;
 pub mod objective;
@@ -23,6 +26,9 @@ pub mod phase_resonance;
 pub mod uncertainty;
 
 pub use data::{Curve, DataError, Dataset, Record};
+pub use equation_error::{EquationErrorFit, PhaseConvention};
+pub use identify::{identify, FitPlan, GainChoice, Identification, IdentifyError, JumpChoice, PhaseChoice, SignChoice};
+pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};
 pub use models::{ModelKind, N_PARAMS, PARAM_NAMES};
 pub use objective::{FitSpec, Sign, SpecError, Status};
@@ -30,7 +36,7 @@ pub use uncertainty::Uncertainty;
 
 use crate::error::SolveError;
 use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
-use objective::{evaluate, normalised_model, Problem};
+use objective::{evaluate_with_phase, normalised_model, Problem};
 
 /// Errors of a fit.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -108,9 +114,54 @@ pub struct FitResult {
     pub levels: Vec<LevelStats>,
     /// Model amplitudes at the data steps (curve by curve).
     pub model_amplitudes: Vec<f64>,
+    /// The local solver met a convergence criterion (not max-iterations or
+    /// stalled).
+    pub converged: bool,
+    /// Free parameters that ended at (within 1e-6 of the box width of) a bound.
+    pub at_bounds: Vec<&'static str>,
+    /// Free parameters along a (numerically) null direction of the
+    /// Jacobian at the optimum: the data cannot separate them.
+    pub unidentifiable: Vec<&'static str>,
+    /// Part of `cost` from phase residuals (`None` when phase was not fitted).
+    pub phase_cost: Option<f64>,
 }
 
 impl FitResult {
+    /// Whether the linearised intervals mean anything: the fit converged,
+    /// no parameter sits at a bound and the Jacobian has full rank.
+    pub fn intervals_valid(&self) -> bool {
+        self.converged
+            && self.at_bounds.is_empty()
+            && self.unidentifiable.is_empty()
+            && self.uncertainty.is_some()
+    }
+
+    /// One line saying why the fit is not trustworthy, `None` if it is.
+    pub fn warning(&self) -> Option<String> {
+        let mut why = Vec::new();
+        if !self.converged {
+            why.push(format!("did not converge ({})", self.termination));
+        }
+        if !self.at_bounds.is_empty() {
+            why.push(format!("at bounds: {}", self.at_bounds.join(", ")));
+        }
+        if !self.unidentifiable.is_empty() {
+            why.push(format!(
+                "not identifiable from these data: {}",
+                self.unidentifiable.join(", ")
+            ));
+        } else if self.uncertainty.is_none() {
+            why.push("no intervals (J^T J singular or no residual degrees of freedom)".into());
+        }
+        (!why.is_empty()).then(|| {
+            format!(
+                "WARNING: the {} fit {}; intervals are not valid",
+                self.kind,
+                why.join("; ")
+            )
+        })
+    }
+
     /// Akaike information criterion `n ln(cost/n) + 2p`.
     pub fn aic(&self) -> f64 {
         let n = self.n_points as f64;
@@ -230,9 +281,52 @@ fn fit_impl(
         })
         .collect();
     let theta = problem.theta(&best.result.u);
-    let e = evaluate(data, &theta, true)?;
+    let at_bounds: Vec<&'static str> = problem
+        .free
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| {
+            let w = (hi[k] - lo[k]).abs().max(1e-300);
+            let u = best.result.u[k];
+            (u - lo[k]).abs() <= 1e-6 * w || (hi[k] - u).abs() <= 1e-6 * w
+        })
+        .map(|(_, &j)| PARAM_NAMES[j])
+        .collect();
+    assess(
+        data,
+        spec,
+        &problem.free,
+        theta,
+        best.result.termination,
+        best.result.iterations,
+        minima,
+        at_bounds,
+    )
+}
+
+/// The statistics of a fit at θ on `data`: cost, per-level RMS, model
+/// amplitudes, linearised intervals and null directions of the Jacobian.
+/// (Used for the fit's own data, and to judge a fit made on a subsample on
+/// all points.)
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn assess(
+    data: &Dataset,
+    spec: &FitSpec,
+    free: &[usize],
+    theta: [f64; N_PARAMS],
+    termination: Termination,
+    iterations: usize,
+    minima: Vec<Minimum>,
+    at_bounds: Vec<&'static str>,
+) -> Result<FitResult, FitError> {
+    let e = evaluate_with_phase(data, &theta, true, spec.phase_weight)?;
     let jac = e.jacobian.as_ref().expect("jacobian requested");
-    let unc = uncertainty::uncertainty(&theta, &problem.free, jac, &e.residuals);
+    let unc = uncertainty::uncertainty(&theta, free, jac, &e.residuals);
+    let unidentifiable = uncertainty::null_directions(free, jac);
+    let n_amp = data.len();
+    let phase_cost = spec
+        .phase_weight
+        .map(|_| e.residuals[n_amp..].iter().map(|r| r * r).sum::<f64>());
     let mut levels = Vec::new();
     let mut off = 0;
     for c in &data.curves {
@@ -258,14 +352,18 @@ fn fit_impl(
         status: spec.status,
         theta,
         cost: e.cost(),
-        n_points: data.len(),
-        n_free: problem.free.len(),
-        termination: best.result.termination,
-        iterations: best.result.iterations,
+        n_points: e.residuals.len(),
+        n_free: free.len(),
+        termination,
+        iterations,
         minima,
         uncertainty: unc,
         levels,
         model_amplitudes: e.model,
+        converged: termination.converged(),
+        at_bounds,
+        unidentifiable,
+        phase_cost,
     })
 }
 

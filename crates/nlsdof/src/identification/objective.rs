@@ -88,6 +88,10 @@ pub struct FitSpec {
     pub scales: Scales,
     /// Sign of the fitted nonlinear stiffness β (when β is free).
     pub stiffness_sign: Sign,
+    /// Weight `w_φ` of the phase residuals (`None`: amplitudes only, plain
+    /// Eq 31). Used on the curves that carry phases, which must then be
+    /// displacement phase **lags** in rad (see [`evaluate_with_phase`]).
+    pub phase_weight: Option<f64>,
 }
 
 /// Sign of the nonlinear stiffness coefficient β in a fit.
@@ -159,7 +163,7 @@ impl FitSpec {
     /// * `β_ref,0 = Ω_peak,high² − α₀` from the peak shift up to the highest
     ///   level (at least `0.01 α₀`), `κ_ref,0 = δ₀/2`;
     /// * bounds: α ∈ [(Ω_min/2)², (1.5 Ω_max)²] over the data's frequencies;
-    ///   δ ∈ [1e-4 δ₀, 1e2 δ₀]; β_ref ∈ [1e-6 α₀, 2 α₀];
+    ///   δ ∈ [1e-4 δ₀, 1e2 δ₀]; β_ref ∈ [1e-6 α₀, 20 α₀];
     ///   κ_ref ∈ [1e-6 δ₀, 1e2 δ₀]; ρ ∈ [0, 10]; η ∈ [−1, 8];
     ///   gain ∈ [0.1, 10] (fixed at 1 unless freed).
     pub fn new(kind: ModelKind, data: &Dataset) -> Self {
@@ -244,7 +248,7 @@ impl FitSpec {
         let bounds = [
             ((0.5 * wmin).powi(2), (1.5 * wmax).powi(2)),
             (1e-4 * delta0, 1e2 * delta0),
-            (1e-6 * alpha0, 2.0 * alpha0),
+            (1e-6 * alpha0, 20.0 * alpha0),
             (0.0, 10.0),
             (1e-6 * delta0, 1e2 * delta0),
             (-1.0, 8.0),
@@ -257,6 +261,7 @@ impl FitSpec {
             start,
             scales,
             stiffness_sign: Sign::Hardening,
+            phase_weight: None,
         }
     }
 
@@ -532,6 +537,57 @@ impl DerivativeConstants {
         }
         out
     }
+
+    /// `dφ/dθ` of the phase lag `φ = atan2(ΩD, S)` at the root `a`, given
+    /// `da/dθ` ([`Self::derivatives`]); see [`evaluate_with_phase`].
+    pub fn phase_derivatives(
+        &self,
+        omega: f64,
+        a: f64,
+        da: &[f64; N_PARAMS],
+    ) -> [f64; N_PARAMS] {
+        let theta = &self.theta;
+        let (alpha, delta, beta, rho, kappa, eta) = (
+            theta[ALPHA],
+            theta[DELTA],
+            theta[BETA],
+            theta[RHO],
+            theta[KAPPA],
+            theta[ETA],
+        );
+        let la = a.ln();
+        let lwa = (omega * a).ln();
+        let (gr, ge) = (self.g_rho, self.g_eta);
+        let ar = if beta != 0.0 { (rho * la).exp() } else { 0.0 };
+        let wae = if kappa != 0.0 { (eta * lwa).exp() } else { 0.0 };
+        let gbar = gr * beta * ar;
+        let gkw = ge * kappa * wae;
+        let p = alpha + gbar - omega * omega;
+        let q = omega * (delta + gkw);
+        let den = p * p + q * q;
+        // ∂S/∂θ and ∂(ΩD)/∂θ at fixed a
+        let mut ds = [0.0; N_PARAMS];
+        let mut dq = [0.0; N_PARAMS];
+        ds[ALPHA] = 1.0;
+        dq[DELTA] = omega;
+        if beta != 0.0 {
+            ds[BETA] = gr * ar;
+            ds[RHO] = beta * ar * (self.dg_rho + gr * la);
+        }
+        if kappa != 0.0 {
+            dq[KAPPA] = omega * ge * wae;
+            dq[ETA] = omega * kappa * wae * (self.dg_eta + ge * lwa);
+        }
+        let ds_da = rho * gbar / a;
+        let dq_da = omega * eta * gkw / a;
+        let mut out = [0.0; N_PARAMS];
+        for j in 0..N_PARAMS {
+            let dsj = ds[j] + ds_da * da[j];
+            let dqj = dq[j] + dq_da * da[j];
+            out[j] = (p * dqj - q * dsj) / den;
+        }
+        out
+    }
 }
 
 /// The measured amplitude at a curve's first step in sweep order (the
@@ -563,6 +619,18 @@ pub fn model_amplitudes(
     data: &Dataset,
     theta: &[f64; N_PARAMS],
 ) -> Result<Vec<Vec<f64>>, SolveError> {
+    Ok(model_response(data, theta)?
+        .into_iter()
+        .map(|c| c.into_iter().map(|(a, _)| a).collect())
+        .collect())
+}
+
+/// As [`model_amplitudes`], with the model's phase lag (rad) at each step:
+/// `(a, φ)` per step; sticking points give `(0, 0)`.
+pub fn model_response(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+) -> Result<Vec<Vec<(f64, f64)>>, SolveError> {
     use rayon::prelude::*;
     let model = normalised_model(theta);
     data.curves
@@ -574,15 +642,21 @@ pub fn model_amplitudes(
                 Formulation::HarmonicBalance,
             )?;
             let sw = r.sweep_from(&c.omegas, c.direction, first_amplitude(c))?;
-            let mut amps: Vec<f64> = sw
+            let mut out: Vec<(f64, f64)> = sw
                 .points
                 .iter()
-                .map(|p| if p.sticking { 0.0 } else { p.amplitude })
+                .map(|p| {
+                    if p.sticking {
+                        (0.0, 0.0)
+                    } else {
+                        (p.amplitude, p.phase)
+                    }
+                })
                 .collect();
             if c.direction == SweepDirection::Down {
-                amps.reverse();
+                out.reverse();
             }
-            Ok(amps)
+            Ok(out)
         })
         .collect()
 }
@@ -593,16 +667,42 @@ pub fn evaluate(
     theta: &[f64; N_PARAMS],
     jacobian: bool,
 ) -> Result<Evaluation, SolveError> {
-    let amps = model_amplitudes(data, theta)?;
+    evaluate_with_phase(data, theta, jacobian, None)
+}
+
+/// Eq 31's residuals, followed (when `phase_weight = Some(w_φ)`) by one
+/// phase residual per step of every curve that carries phases:
+///
+/// ```text
+/// r_φ = √(w_φ w) · a_meas · wrap(φ_model − φ_meas) / γ
+/// ```
+///
+/// `a_meas Δφ/γ` is the size of the complex response error that a phase
+/// error Δφ makes, so with `w_φ = 1` an amplitude error and a phase error of
+/// the same complex size weigh the same. `φ` is the displacement phase lag
+/// (rad); points where the model sticks have no phase residual (0).
+/// `dφ/dθ` follows from `tan φ = Ω D / S` (module docs):
+///
+/// ```text
+/// dφ = (S d(ΩD) − ΩD dS) / (S² + Ω² D²),
+/// dS = ∂S/∂θ + (ρ g(ρ) β a^{ρ−1}) da,   d(ΩD) = Ω ∂D/∂θ + Ω (η g(η) κ Ω^η a^{η−1}) da.
+/// ```
+pub fn evaluate_with_phase(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+    jacobian: bool,
+    phase_weight: Option<f64>,
+) -> Result<Evaluation, SolveError> {
+    let resp = model_response(data, theta)?;
     let n = data.len();
     let mut model = Vec::with_capacity(n);
     let mut residuals = Vec::with_capacity(n);
     let mut jac = jacobian.then(|| Vec::with_capacity(n));
     let dc = DerivativeConstants::new(theta);
-    for (c, am) in data.curves.iter().zip(&amps) {
+    for (c, am) in data.curves.iter().zip(&resp) {
         for i in 0..c.omegas.len() {
             let sw = c.weights[i].sqrt();
-            let a = am[i];
+            let a = am[i].0;
             model.push(a);
             residuals.push(sw * (a - c.amplitudes[i]) / c.gamma);
             if let Some(j) = jac.as_mut() {
@@ -616,6 +716,33 @@ pub fn evaluate(
                     [0.0; N_PARAMS]
                 };
                 j.push(row);
+            }
+        }
+    }
+    if let Some(wp) = phase_weight {
+        for (c, am) in data.curves.iter().zip(&resp) {
+            let Some(ph) = &c.phases else { continue };
+            for i in 0..c.omegas.len() {
+                let k = (wp * c.weights[i]).sqrt() * c.amplitudes[i] / c.gamma;
+                let (a, phi) = am[i];
+                if a > 0.0 {
+                    residuals.push(k * super::equation_error::wrap(phi - ph[i]));
+                } else {
+                    residuals.push(0.0);
+                }
+                if let Some(j) = jac.as_mut() {
+                    let row = if a > 0.0 {
+                        let da = dc.derivatives(c.gamma, c.omegas[i], a);
+                        let mut d = dc.phase_derivatives(c.omegas[i], a, &da);
+                        for v in d.iter_mut() {
+                            *v *= k;
+                        }
+                        d
+                    } else {
+                        [0.0; N_PARAMS]
+                    };
+                    j.push(row);
+                }
             }
         }
     }
@@ -776,7 +903,7 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
         let th = self.theta(u);
-        let e = evaluate(self.data, &th, false).ok()?;
+        let e = evaluate_with_phase(self.data, &th, false, self.spec.phase_weight).ok()?;
         e.residuals
             .iter()
             .all(|r| r.is_finite())
@@ -785,7 +912,7 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.theta(u);
-        let e = evaluate(self.data, &th, true).ok()?;
+        let e = evaluate_with_phase(self.data, &th, true, self.spec.phase_weight).ok()?;
         let cols = self.dtheta_du(&th);
         let n = self.free.len();
         let jt = e.jacobian.as_ref()?;

@@ -95,6 +95,44 @@ pub fn uncertainty(
     })
 }
 
+/// Names of the free parameters that the data cannot separate: the main
+/// components (> 0.2 of the largest) of every eigenvector of the
+/// column-scaled `JᵀJ` whose eigenvalue is below `1e-12` of the largest
+/// (condition number above 1e12), or whose Jacobian column is zero.
+/// Empty when `J` has full numerical rank.
+pub fn null_directions(free: &[usize], jacobian: &[[f64; N_PARAMS]]) -> Vec<&'static str> {
+    let p = free.len();
+    let j: Vec<f64> = jacobian
+        .iter()
+        .flat_map(|row| free.iter().map(move |&k| row[k]))
+        .collect();
+    let zero = vec![0.0; jacobian.len()];
+    let (a, _) = normal_equations(&j, &zero, p);
+    let d: Vec<f64> = (0..p).map(|k| a[k * p + k].sqrt()).collect();
+    let mut names: Vec<&'static str> = (0..p)
+        .filter(|&k| !(d[k] > 0.0 && d[k].is_finite()))
+        .map(|k| PARAM_NAMES[free[k]])
+        .collect();
+    if !names.is_empty() {
+        return names;
+    }
+    let m = nalgebra::DMatrix::from_fn(p, p, |r, c| a[r * p + c] / (d[r] * d[c]));
+    let eig = m.symmetric_eigen();
+    let emax = eig.eigenvalues.iter().fold(0.0f64, |s, &e| s.max(e));
+    for (i, &e) in eig.eigenvalues.iter().enumerate() {
+        if e < 1e-12 * emax {
+            let v = eig.eigenvectors.column(i);
+            let vmax = v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+            for k in 0..p {
+                if v[k].abs() > 0.2 * vmax && !names.contains(&PARAM_NAMES[free[k]]) {
+                    names.push(PARAM_NAMES[free[k]]);
+                }
+            }
+        }
+    }
+    names
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

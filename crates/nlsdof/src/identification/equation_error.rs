@@ -1,0 +1,859 @@
+//! Branch-free equation-error estimator: the first stage of every sweep fit.
+//!
+//! ## Why
+//! Eq 31 compares amplitudes on the branch the model's sweep follows. It is
+//! piecewise constant in the jump locations and has many basins, so a local
+//! solver on it needs a start that is already right. The first-order
+//! harmonic-balance equations give one: **every** measured point
+//! `(Ω, a, γ[, φ])` satisfies them, whichever branch (upper, lower, or even
+//! an unstable one) it lies on, so no branch has to be followed.
+//!
+//! ## The equations (paper Eq 9, 22, 29 under `x = a cos(Ωt − φ)`)
+//! With `S = α + g(ρ) β |a|^ρ − Ω²` and `D = δ + g(η) κ |Ω a|^η`:
+//!
+//! ```text
+//! with phase:     S a = G γ cos φ,        Ω D a = G γ sin φ
+//! without phase:  a² [ S² + Ω² D² ] = (G γ)²
+//! ```
+//!
+//! For fixed exponents `(ρ, η)` the phase form is **linear** least squares
+//! in `(α, β, δ, κ, G)`, solved in closed form ([`solve_phase`]). Without
+//! phase the residual `r = a √(S² + Ω² D²) / (G γ) − 1` (relative, square
+//! rooted so that a 1 % amplitude error is a residual of 0.01 everywhere on
+//! the curve) is minimised by bounded Levenberg–Marquardt from the trivial
+//! start (β = 0, damping from the peak height; [`solve_magnitude`]); for fixed
+//! exponents it is small and well conditioned.
+//!
+//! ## Phase conventions
+//! Instruments report phase differently: lag or lead, relative to force or
+//! base acceleration, of displacement or velocity (+90°), absolute or
+//! relative motion (+180°), plus a constant sensor delay `τ` (a lag `Ωτ`).
+//! With the measured phase `ψ` modelled as `ψ = s φ + c + Ω τ`
+//! (`s = ±1`, constant offset `c`), the phase equations become
+//!
+//! ```text
+//! (S + i Ω D) a = G̃ γ e^{i s (ψ − Ω τ)},   G̃ = G e^{−i s c}
+//! ```
+//!
+//! still linear, with a **complex** gain `G̃` that absorbs the unknown offset.
+//! [`PhaseConvention`] states `s`, `c`, `τ`; with
+//! [`PhaseMode::Detect`] the estimator tries `s = ±1` (τ as given, default 0),
+//! keeps the sign with the smaller cost and reads `c = −arg(G̃)/s` from the
+//! fitted complex gain. A sweep through resonance changes the lag by ≈ 180°:
+//! `s` is the sign of that change; the offset is the phase where the
+//! displacement lag is 0 (the quasi-static end).
+//!
+//! ## Errors-in-variables bias
+//! Equation error puts the measured `a` (and `φ`) inside the regressors: with
+//! amplitude noise `a = a₀(1 + ε)` the residual is
+//! `≈ ε (S a + ρ g(ρ) β a^{ρ+1}) / γ` plus a term in `ε²`, and the regressors
+//! are correlated with it. The least-squares estimate is therefore biased by
+//! `O(σ²)` (σ the relative noise), and near resonance, where `S ≈ 0` and the
+//! regressors are most sensitive, the bias is largest. At 1 % noise it is
+//! small but not negligible for δ and the exponents; the output-error fit
+//! (Eq 31, branch following included), which attributes the noise to the
+//! measured output only, is unbiased to first order and is run from the
+//! equation-error estimate. The equation-error stage provides the *basin*,
+//! the output-error stage the *estimate*.
+//!
+//! Scaling: coefficients are solved as `α/Ω_ref²`, `β_ref/Ω_ref²`
+//! (`β_ref = g(ρ) β A_ref^ρ`), `δ/Ω_ref`, `κ_ref/Ω_ref`
+//! (`κ_ref = g(η) κ (Ω_ref A_ref)^η`) with `A_ref` the largest measured
+//! amplitude and `Ω_ref` its frequency, so that all unknowns are O(1).
+
+use super::data::Dataset;
+use super::levenberg_marquardt::{minimise, LeastSquares, LmOptions};
+use super::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, N_PARAMS, PARAM_NAMES, RHO};
+use super::objective::Scales;
+use crate::power_law::g_unchecked;
+
+/// How the measured phase relates to the model's displacement phase lag φ:
+/// `ψ = sign · φ + offset + Ω · delay` (rad, s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseConvention {
+    /// `+1`: the file's phase is a lag (grows through resonance); `−1`: a lead.
+    pub sign: f64,
+    /// Constant offset `c`, rad (e.g. π/2 for velocity, π for relative motion
+    /// against base acceleration).
+    pub offset: f64,
+    /// Constant delay τ, s (a lag `Ω τ` added by the instrument chain).
+    pub delay: f64,
+}
+
+impl Default for PhaseConvention {
+    /// Displacement phase lag behind the input, no offset, no delay (the
+    /// convention of nlsdof's own outputs).
+    fn default() -> Self {
+        Self {
+            sign: 1.0,
+            offset: 0.0,
+            delay: 0.0,
+        }
+    }
+}
+
+impl PhaseConvention {
+    /// The model phase lag φ of a measured phase ψ at Ω.
+    pub fn lag(&self, psi: f64, omega: f64) -> f64 {
+        self.sign * (psi - self.offset - omega * self.delay)
+    }
+}
+
+/// How the equation-error stage uses phase.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PhaseMode {
+    /// Phase not used (magnitude equation only).
+    Ignore,
+    /// The convention is known.
+    Known(PhaseConvention),
+    /// Sign and offset detected from the data (the delay, if any, is given).
+    Detect { delay: f64 },
+}
+
+/// Which terms the equation-error model contains.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Terms {
+    pub stiffness: bool,
+    pub damping: bool,
+    /// `None`: gain estimated; `Some(g)`: held at `g`.
+    pub gain: Option<f64>,
+}
+
+/// Result of an equation-error fit at fixed exponents.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EquationErrorFit {
+    /// θ = (α, δ, β, ρ, κ, η, gain), natural units (β signed).
+    pub theta: [f64; N_PARAMS],
+    /// Sum of squared residuals (see the module docs for their scaling).
+    pub cost: f64,
+    /// Number of residuals (2 per point with phase, 1 without).
+    pub n_residuals: usize,
+    /// Number of estimated coefficients.
+    pub n_unknowns: usize,
+    /// The convention used or detected (None without phase).
+    pub phase: Option<PhaseConvention>,
+    /// Names of parameters the data cannot separate (empty if well posed).
+    pub unidentifiable: Vec<&'static str>,
+}
+
+/// Errors of the equation-error stage.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EquationErrorError {
+    #[error("the data cannot separate {names}: the equation-error system is rank-deficient (need more levels, frequencies, or amplitude variation)", names = .names.join(", "))]
+    RankDeficient { names: Vec<&'static str> },
+    #[error("phase = {value} rad at {f_hz} Hz (level {level}) is not finite or outside [-2 pi, 2 pi] (360 degrees)")]
+    BadPhase {
+        level: String,
+        value: f64,
+        f_hz: f64,
+    },
+    #[error("phase mode needs phases on every curve, but level {level} has none")]
+    MissingPhase { level: String },
+    #[error("the equation-error fit did not converge for rho = {rho}, eta = {eta}")]
+    NotConverged { rho: f64, eta: f64 },
+}
+
+/// One measured point, pre-processed.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Point {
+    pub omega: f64,
+    pub a: f64,
+    pub gamma: f64,
+    pub sw: f64,
+    pub psi: f64,
+    /// ln a, ln(Ω a) (for the powers).
+    pub la: f64,
+    pub lwa: f64,
+}
+
+/// The data prepared once for many equation-error solves.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    pub(crate) points: Vec<Point>,
+    pub(crate) scales: Scales,
+    pub(crate) has_phase: bool,
+    /// Start values (scaled): α̃₀, δ̃₀ (from the lowest level's peak).
+    pub(crate) alpha0: f64,
+    pub(crate) delta0: f64,
+    pub(crate) beta0: f64,
+}
+
+impl Prepared {
+    /// Prepares `data` (validated phases; every point with `a > 0` used).
+    pub fn new(data: &Dataset, scales: Scales) -> Result<Self, EquationErrorError> {
+        let mut points = Vec::with_capacity(data.len());
+        let has_phase = data.curves.iter().all(|c| c.phases.is_some());
+        for c in &data.curves {
+            for i in 0..c.omegas.len() {
+                let (w, a) = (c.omegas[i], c.amplitudes[i]);
+                let psi = c.phases.as_ref().map_or(0.0, |p| p[i]);
+                if c.phases.is_some() && !(psi.is_finite() && psi.abs() <= 2.0 * std::f64::consts::PI + 1e-9) {
+                    return Err(EquationErrorError::BadPhase {
+                        level: c.level.clone(),
+                        value: psi,
+                        f_hz: w / (2.0 * std::f64::consts::PI),
+                    });
+                }
+                if !(a > 0.0) || c.weights[i] == 0.0 {
+                    continue;
+                }
+                points.push(Point {
+                    omega: w,
+                    a,
+                    gamma: c.gamma,
+                    sw: c.weights[i].sqrt(),
+                    psi,
+                    la: a.ln(),
+                    lwa: (w * a).ln(),
+                });
+            }
+        }
+        // start: lowest level's peak
+        let low = data
+            .curves
+            .iter()
+            .min_by(|x, y| x.gamma.total_cmp(&y.gamma))
+            .expect("dataset has curves");
+        let k = low.peak_index();
+        let (wp, ap) = (low.omegas[k], low.amplitudes[k].max(f64::MIN_POSITIVE));
+        let high = data
+            .curves
+            .iter()
+            .max_by(|x, y| x.gamma.total_cmp(&y.gamma))
+            .expect("dataset has curves");
+        let wh = high.omegas[high.peak_index()];
+        let wr2 = scales.omega_ref * scales.omega_ref;
+        Ok(Self {
+            points,
+            scales,
+            has_phase,
+            alpha0: wp * wp / wr2,
+            delta0: low.gamma / (ap * wp) / scales.omega_ref,
+            beta0: (wh * wh - wp * wp) / wr2,
+        })
+    }
+
+    /// Whether every curve carries phase.
+    pub fn has_phase(&self) -> bool {
+        self.has_phase
+    }
+
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}
+
+/// Per-point regressors at fixed exponents: `fa = g(ρ) a^{ρ+1} / (A_ref^ρ)`
+/// (so that its coefficient is β_ref), `fd = g(η) Ω a (Ωa)^η / (Ω_ref A_ref)^η`.
+fn regressors(p: &Point, rho: f64, eta: f64, sc: &Scales) -> (f64, f64) {
+    let fa = p.a * ((p.la - sc.a_ref.ln()) * rho).exp();
+    let fd = p.omega * p.a * ((p.lwa - (sc.omega_ref * sc.a_ref).ln()) * eta).exp();
+    (fa, fd)
+}
+
+/// Natural θ from scaled coefficients.
+fn natural(
+    sc: &Scales,
+    rho: f64,
+    eta: f64,
+    alpha_s: f64,
+    beta_s: f64,
+    delta_s: f64,
+    kappa_s: f64,
+    gain: f64,
+) -> [f64; N_PARAMS] {
+    let wr = sc.omega_ref;
+    let mut th = [0.0; N_PARAMS];
+    th[ALPHA] = alpha_s * wr * wr;
+    th[DELTA] = delta_s * wr;
+    th[RHO] = rho;
+    th[ETA] = eta;
+    th[BETA] = beta_s * wr * wr / (g_unchecked(rho) * sc.a_ref.powf(rho));
+    th[KAPPA] = kappa_s * wr / (g_unchecked(eta) * (sc.omega_ref * sc.a_ref).powf(eta));
+    th[GAIN] = gain;
+    th
+}
+
+/// Small dense least squares `min ‖A x − b‖²` by column-scaled normal
+/// equations (at most 6 unknowns), with a rank check by the eigenvalues of
+/// the scaled normal matrix (nalgebra's symmetric eigen-decomposition).
+struct SmallLs {
+    n: usize,
+    ata: [[f64; 6]; 6],
+    atb: [f64; 6],
+}
+
+impl SmallLs {
+    fn new(n: usize) -> Self {
+        Self {
+            n,
+            ata: [[0.0; 6]; 6],
+            atb: [0.0; 6],
+        }
+    }
+
+    fn add(&mut self, row: &[f64], b: f64) {
+        for p in 0..self.n {
+            if row[p] == 0.0 {
+                continue;
+            }
+            self.atb[p] += row[p] * b;
+            for q in 0..=p {
+                self.ata[p][q] += row[p] * row[q];
+            }
+        }
+    }
+
+    /// Solution, and the indices of a null direction's main components if
+    /// the scaled normal matrix has condition number above 1e12.
+    fn solve(&self) -> (Option<Vec<f64>>, Vec<usize>) {
+        let n = self.n;
+        let d: Vec<f64> = (0..n).map(|k| self.ata[k][k].sqrt()).collect();
+        let dead: Vec<usize> = (0..n).filter(|&k| !(d[k] > 0.0 && d[k].is_finite())).collect();
+        if !dead.is_empty() {
+            return (None, dead);
+        }
+        let m = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+            let v = if i >= j { self.ata[i][j] } else { self.ata[j][i] };
+            v / (d[i] * d[j])
+        });
+        let eig = m.clone().symmetric_eigen();
+        let (mut imin, mut emin, mut emax) = (0, f64::INFINITY, 0.0f64);
+        for (i, &e) in eig.eigenvalues.iter().enumerate() {
+            if e < emin {
+                emin = e;
+                imin = i;
+            }
+            emax = emax.max(e);
+        }
+        if !(emin > 1e-12 * emax) {
+            let v = eig.eigenvectors.column(imin);
+            let vmax = v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+            let names = (0..n).filter(|&k| v[k].abs() > 0.2 * vmax).collect();
+            return (None, names);
+        }
+        let b = nalgebra::DVector::from_fn(n, |i, _| self.atb[i] / d[i]);
+        match m.cholesky() {
+            Some(ch) => {
+                let y = ch.solve(&b);
+                (Some((0..n).map(|i| y[i] / d[i]).collect()), Vec::new())
+            }
+            None => (None, (0..n).collect()),
+        }
+    }
+}
+
+/// Equation-error fit **with phase** at fixed exponents (linear least
+/// squares, closed form). `conv = None` detects sign and offset.
+pub fn solve_phase(
+    prep: &Prepared,
+    terms: Terms,
+    rho: f64,
+    eta: f64,
+    conv: Option<PhaseConvention>,
+    delay: f64,
+) -> Result<EquationErrorFit, EquationErrorError> {
+    match conv {
+        Some(c) => solve_phase_known(prep, terms, rho, eta, c),
+        None => {
+            let mut best: Option<EquationErrorFit> = None;
+            let mut last_err = None;
+            for sign in [1.0, -1.0] {
+                // complex gain free: offset from its argument
+                match solve_phase_complex(prep, terms, rho, eta, sign, delay) {
+                    Ok((fit, offset)) => {
+                        let conv = PhaseConvention {
+                            sign,
+                            offset,
+                            delay,
+                        };
+                        let fit = if terms.gain.is_some() {
+                            // re-solve with the offset known and the gain held
+                            solve_phase_known(prep, terms, rho, eta, conv)?
+                        } else {
+                            EquationErrorFit {
+                                phase: Some(conv),
+                                ..fit
+                            }
+                        };
+                        // The two signs are mirror images (φ → −φ with
+                        // D → −D) of equal cost when the damping is free:
+                        // the physical one has positive damping at the
+                        // points; the cost decides otherwise.
+                        let key = |f: &EquationErrorFit| {
+                            (std::cmp::Reverse(damping_positive(prep, f) as u8), f.cost)
+                        };
+                        if best.as_ref().map_or(true, |b| {
+                            key(&fit).partial_cmp(&key(b)) == Some(std::cmp::Ordering::Less)
+                        }) {
+                            best = Some(fit);
+                        }
+                    }
+                    Err(e) => last_err = Some(e),
+                }
+            }
+            best.ok_or_else(|| last_err.expect("an error when no sign worked"))
+        }
+    }
+}
+
+/// Whether the fitted damping force `Ω D a` is positive on average over
+/// the points (the physical sign of the phase convention).
+fn damping_positive(prep: &Prepared, f: &EquationErrorFit) -> bool {
+    let th = &f.theta;
+    let ge = if th[KAPPA] != 0.0 { g_unchecked(th[ETA]) } else { 0.0 };
+    let s: f64 = prep
+        .points
+        .iter()
+        .map(|p| {
+            let d = th[DELTA] + ge * th[KAPPA] * (p.lwa * th[ETA]).exp();
+            p.omega * d * p.a / p.gamma
+        })
+        .sum();
+    s > 0.0
+}
+
+/// Column layout of the phase system: α, β?, δ, κ?, then gain columns.
+fn layout(terms: Terms) -> (Vec<usize>, usize) {
+    let mut cols = vec![ALPHA];
+    if terms.stiffness {
+        cols.push(BETA);
+    }
+    cols.push(DELTA);
+    if terms.damping {
+        cols.push(KAPPA);
+    }
+    let n = cols.len();
+    (cols, n)
+}
+
+fn names_of(cols: &[usize], idx: &[usize]) -> Vec<&'static str> {
+    idx.iter()
+        .map(|&k| cols.get(k).map_or("gain", |&j| PARAM_NAMES[j]))
+        .collect()
+}
+
+fn solve_phase_complex(
+    prep: &Prepared,
+    terms: Terms,
+    rho: f64,
+    eta: f64,
+    sign: f64,
+    delay: f64,
+) -> Result<(EquationErrorFit, f64), EquationErrorError> {
+    let sc = &prep.scales;
+    let (cols, nc) = layout(terms);
+    let n = nc + 2;
+    let wr = sc.omega_ref;
+    let mut ls = SmallLs::new(n);
+    let mut rows: Vec<([f64; 6], f64, [f64; 6], f64)> = Vec::with_capacity(prep.points.len());
+    for p in &prep.points {
+        let (fa, fd) = regressors(p, rho, eta, sc);
+        let th = sign * (p.psi - p.omega * delay);
+        let (s, c) = th.sin_cos();
+        let k = p.sw / p.gamma;
+        let mut re = [0.0; 6];
+        let mut im = [0.0; 6];
+        let mut q = 0;
+        re[q] = k * p.a;
+        q += 1;
+        if terms.stiffness {
+            re[q] = k * fa;
+            q += 1;
+        }
+        im[q] = k * p.omega * p.a / wr;
+        q += 1;
+        if terms.damping {
+            im[q] = k * fd / wr;
+            q += 1;
+        }
+        // G̃ = Gr + i Gi (unknowns scaled by 1/Ω_ref²: the rows are divided by Ω_ref²)
+        re[q] = -p.sw * c / (wr * wr);
+        re[q + 1] = p.sw * s / (wr * wr);
+        im[q] = -p.sw * s / (wr * wr);
+        im[q + 1] = -p.sw * c / (wr * wr);
+        let bre = k * p.omega * p.omega * p.a / (wr * wr);
+        ls.add(&re[..n], bre);
+        ls.add(&im[..n], 0.0);
+        rows.push((re, bre, im, 0.0));
+    }
+    let (x, null) = ls.solve();
+    let Some(x) = x else {
+        return Err(EquationErrorError::RankDeficient {
+            names: names_of(&cols, &null),
+        });
+    };
+    let cost = residual_cost(&rows, &x);
+    let (gr, gi) = (x[nc], x[nc + 1]);
+    let gain = gr.hypot(gi);
+    let offset = -gi.atan2(gr) / sign;
+    let theta = unpack(sc, &cols, &x, rho, eta, gain, terms);
+    Ok((
+        EquationErrorFit {
+            theta,
+            cost,
+            n_residuals: 2 * prep.points.len(),
+            n_unknowns: n,
+            phase: None,
+            unidentifiable: Vec::new(),
+        },
+        wrap(offset),
+    ))
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap(x: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let mut y = x.rem_euclid(t);
+    if y > std::f64::consts::PI {
+        y -= t;
+    }
+    y
+}
+
+fn residual_cost(rows: &[([f64; 6], f64, [f64; 6], f64)], x: &[f64]) -> f64 {
+    let mut cost = 0.0;
+    for (re, bre, im, bim) in rows {
+        let mut r1 = -bre;
+        let mut r2 = -bim;
+        for k in 0..x.len() {
+            r1 += re[k] * x[k];
+            r2 += im[k] * x[k];
+        }
+        cost += r1 * r1 + r2 * r2;
+    }
+    cost
+}
+
+fn unpack(
+    sc: &Scales,
+    cols: &[usize],
+    x: &[f64],
+    rho: f64,
+    eta: f64,
+    gain: f64,
+    terms: Terms,
+) -> [f64; N_PARAMS] {
+    let get = |j: usize| cols.iter().position(|&c| c == j).map_or(0.0, |k| x[k]);
+    let mut th = natural(
+        sc,
+        if terms.stiffness { rho } else { 0.0 },
+        if terms.damping { eta } else { 0.0 },
+        get(ALPHA),
+        get(BETA),
+        get(DELTA),
+        get(KAPPA),
+        gain,
+    );
+    if !terms.stiffness {
+        th[BETA] = 0.0;
+        th[RHO] = 0.0;
+    }
+    if !terms.damping {
+        th[KAPPA] = 0.0;
+        th[ETA] = 0.0;
+    }
+    th
+}
+
+fn solve_phase_known(
+    prep: &Prepared,
+    terms: Terms,
+    rho: f64,
+    eta: f64,
+    conv: PhaseConvention,
+) -> Result<EquationErrorFit, EquationErrorError> {
+    let sc = &prep.scales;
+    let (cols, nc) = layout(terms);
+    let n = nc + usize::from(terms.gain.is_none());
+    let wr = sc.omega_ref;
+    let mut ls = SmallLs::new(n);
+    let mut rows = Vec::with_capacity(prep.points.len());
+    for p in &prep.points {
+        let (fa, fd) = regressors(p, rho, eta, sc);
+        let phi = conv.lag(p.psi, p.omega);
+        let (s, c) = phi.sin_cos();
+        let k = p.sw / p.gamma;
+        let mut re = [0.0; 6];
+        let mut im = [0.0; 6];
+        let mut q = 0;
+        re[q] = k * p.a;
+        q += 1;
+        if terms.stiffness {
+            re[q] = k * fa;
+            q += 1;
+        }
+        im[q] = k * p.omega * p.a / wr;
+        q += 1;
+        if terms.damping {
+            im[q] = k * fd / wr;
+            q += 1;
+        }
+        let mut bre = k * p.omega * p.omega * p.a / (wr * wr);
+        let mut bim = 0.0;
+        match terms.gain {
+            None => {
+                re[q] = -p.sw * c / (wr * wr);
+                im[q] = -p.sw * s / (wr * wr);
+            }
+            Some(g) => {
+                bre += g * p.sw * c / (wr * wr);
+                bim += g * p.sw * s / (wr * wr);
+            }
+        }
+        ls.add(&re[..n], bre);
+        ls.add(&im[..n], bim);
+        rows.push((re, bre, im, bim));
+    }
+    let (x, null) = ls.solve();
+    let Some(x) = x else {
+        return Err(EquationErrorError::RankDeficient {
+            names: names_of(&cols, &null),
+        });
+    };
+    let cost = residual_cost(&rows, &x);
+    let gain = terms.gain.unwrap_or_else(|| x[nc]);
+    Ok(EquationErrorFit {
+        theta: unpack(sc, &cols, &x, rho, eta, gain, terms),
+        cost,
+        n_residuals: 2 * prep.points.len(),
+        n_unknowns: n,
+        phase: Some(conv),
+        unidentifiable: Vec::new(),
+    })
+}
+
+/// The magnitude-only problem at fixed exponents, in scaled unknowns
+/// `x = (α̃, β̃?, δ̃, κ̃?, G?)`.
+struct Magnitude<'a> {
+    prep: &'a Prepared,
+    terms: Terms,
+    /// Per point: (fa, fd) regressors, scaled by Ω_ref as in the phase form.
+    reg: Vec<(f64, f64)>,
+}
+
+impl Magnitude<'_> {
+    fn unpack(&self, x: &[f64]) -> (f64, f64, f64, f64, f64) {
+        let mut q = 0;
+        let mut next = |present: bool| {
+            if present {
+                q += 1;
+                x[q - 1]
+            } else {
+                0.0
+            }
+        };
+        let al = next(true);
+        let be = next(self.terms.stiffness);
+        let de = next(true);
+        let ka = next(self.terms.damping);
+        let g = match self.terms.gain {
+            Some(g) => g,
+            None => next(true),
+        };
+        (al, be, de, ka, g)
+    }
+
+    /// Residual and its gradient row for point i.
+    fn point(&self, i: usize, x: &[f64], row: Option<&mut [f64]>) -> f64 {
+        let p = &self.prep.points[i];
+        let (fa, fd) = self.reg[i];
+        let wr = self.prep.scales.omega_ref;
+        let (al, be, de, ka, g) = self.unpack(x);
+        // dimensionless: S̃ = S/Ω_ref², Ω̃D̃ = ΩD/Ω_ref²
+        let w2 = p.omega * p.omega / (wr * wr);
+        let s = al + be * fa / p.a - w2;
+        let od = (de * p.omega * p.a / wr + ka * fd / wr) / p.a;
+        let m = s.hypot(od);
+        let gs = g * p.gamma / (wr * wr * p.a);
+        let r = p.sw * (m / gs - 1.0);
+        if let Some(row) = row {
+            let inv = if m > 0.0 { p.sw / (m * gs) } else { 0.0 };
+            let mut q = 0;
+            row[q] = inv * s;
+            q += 1;
+            if self.terms.stiffness {
+                row[q] = inv * s * fa / p.a;
+                q += 1;
+            }
+            row[q] = inv * od * p.omega / wr;
+            q += 1;
+            if self.terms.damping {
+                row[q] = inv * od * fd / (wr * p.a);
+                q += 1;
+            }
+            if self.terms.gain.is_none() {
+                row[q] = -p.sw * m / (gs * g);
+            }
+        }
+        r
+    }
+}
+
+impl LeastSquares for Magnitude<'_> {
+    fn n_params(&self) -> usize {
+        2 + usize::from(self.terms.stiffness)
+            + usize::from(self.terms.damping)
+            + usize::from(self.terms.gain.is_none())
+    }
+
+    fn residuals(&self, x: &[f64]) -> Option<Vec<f64>> {
+        let r: Vec<f64> = (0..self.prep.points.len())
+            .map(|i| self.point(i, x, None))
+            .collect();
+        r.iter().all(|v| v.is_finite()).then_some(r)
+    }
+
+    fn residuals_and_jacobian(&self, x: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let n = self.n_params();
+        let mut j = vec![0.0; self.prep.points.len() * n];
+        let r: Vec<f64> = (0..self.prep.points.len())
+            .map(|i| self.point(i, x, Some(&mut j[i * n..(i + 1) * n])))
+            .collect();
+        (r.iter().all(|v| v.is_finite()) && j.iter().all(|v| v.is_finite())).then_some((r, j))
+    }
+}
+
+/// Scaled start vector of the magnitude problem, or `warm` if given.
+fn magnitude_start(prep: &Prepared, terms: Terms, sign_hint: f64) -> Vec<f64> {
+    let mut x = vec![prep.alpha0];
+    if terms.stiffness {
+        x.push(sign_hint * prep.beta0.abs().max(1e-3 * prep.alpha0));
+    }
+    let d0 = prep.delta0;
+    x.push(if terms.damping { 0.5 * d0 } else { d0 });
+    if terms.damping {
+        x.push(0.5 * d0);
+    }
+    if terms.gain.is_none() {
+        x.push(1.0);
+    }
+    x
+}
+
+/// Equation-error fit **without phase** at fixed exponents (bounded LM on
+/// the relative magnitude residual). `warm` is a scaled start (e.g. from a
+/// neighbouring landscape node); otherwise the trivial starts (β̃ of either
+/// sign, damping from the peak height) are tried and the best kept.
+pub fn solve_magnitude(
+    prep: &Prepared,
+    terms: Terms,
+    rho: f64,
+    eta: f64,
+    warm: Option<&[f64]>,
+) -> Result<(EquationErrorFit, Vec<f64>), EquationErrorError> {
+    let sc = prep.scales;
+    let reg: Vec<(f64, f64)> = prep
+        .points
+        .iter()
+        .map(|p| regressors(p, rho, eta, &sc))
+        .collect();
+    let prob = Magnitude { prep, terms, reg };
+    let n = prob.n_params();
+    let inf = f64::INFINITY;
+    let mut lo = vec![1e-12; n];
+    let mut hi = vec![inf; n];
+    if terms.stiffness {
+        lo[1] = -inf;
+        hi[1] = inf;
+    }
+    // damping coefficients may reach 0
+    let kd = if terms.stiffness { 2 } else { 1 };
+    lo[kd] = 0.0;
+    if terms.damping {
+        lo[kd + 1] = 0.0;
+    }
+    let opts = LmOptions {
+        max_iterations: 200,
+        max_evaluations: 600,
+        xtol: 1e-13,
+        ftol: 1e-15,
+        gtol: 1e-13,
+        cost_floor: 1e-28 * prep.points.len() as f64,
+    };
+    let mut starts: Vec<Vec<f64>> = Vec::new();
+    if let Some(w) = warm {
+        starts.push(w.to_vec());
+    } else {
+        starts.push(magnitude_start(prep, terms, 1.0));
+        if terms.stiffness {
+            starts.push(magnitude_start(prep, terms, -1.0));
+            starts.push(magnitude_start(prep, terms, 0.0));
+        }
+    }
+    let mut best: Option<super::levenberg_marquardt::LmResult> = None;
+    for s in &starts {
+        if let Ok(r) = minimise(&prob, s, &lo, &hi, &opts) {
+            if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                best = Some(r);
+            }
+        }
+    }
+    let best = best.ok_or(EquationErrorError::NotConverged { rho, eta })?;
+    let (al, be, de, ka, g) = prob.unpack(&best.u);
+    let mut theta = natural(&sc, rho, eta, al, be, de, ka, g);
+    if !terms.stiffness {
+        theta[BETA] = 0.0;
+        theta[RHO] = 0.0;
+    }
+    if !terms.damping {
+        theta[KAPPA] = 0.0;
+        theta[ETA] = 0.0;
+    }
+    // rank check at the optimum
+    let mut unid = Vec::new();
+    if let Some((_, j)) = prob.residuals_and_jacobian(&best.u) {
+        let mut ls = SmallLs::new(n);
+        for row in j.chunks_exact(n) {
+            ls.add(row, 0.0);
+        }
+        let (x, null) = ls.solve();
+        if x.is_none() {
+            let mut cols = vec![ALPHA];
+            if terms.stiffness {
+                cols.push(BETA);
+            }
+            cols.push(DELTA);
+            if terms.damping {
+                cols.push(KAPPA);
+            }
+            unid = names_of(&cols, &null);
+        }
+    }
+    Ok((
+        EquationErrorFit {
+            theta,
+            cost: best.cost,
+            n_residuals: prep.points.len(),
+            n_unknowns: n,
+            phase: None,
+            unidentifiable: unid,
+        },
+        best.u,
+    ))
+}
+
+/// Scaled unknowns of a natural θ (for warm starts of [`solve_magnitude`]).
+pub fn scaled_of(prep: &Prepared, terms: Terms, theta: &[f64; N_PARAMS]) -> Vec<f64> {
+    let sc = &prep.scales;
+    let wr = sc.omega_ref;
+    let mut x = vec![theta[ALPHA] / (wr * wr)];
+    if terms.stiffness {
+        x.push(theta[BETA] * g_unchecked(theta[RHO]) * sc.a_ref.powf(theta[RHO]) / (wr * wr));
+    }
+    x.push(theta[DELTA] / wr);
+    if terms.damping {
+        x.push(
+            theta[KAPPA] * g_unchecked(theta[ETA]) * (sc.omega_ref * sc.a_ref).powf(theta[ETA])
+                / wr,
+        );
+    }
+    if terms.gain.is_none() {
+        x.push(theta[GAIN]);
+    }
+    x
+}

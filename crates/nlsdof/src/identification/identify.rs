@@ -1,0 +1,632 @@
+//! [`identify`]: the one entry point of a stepped-sine identification —
+//! data in, a [`FitPlan`] (model family, what is fixed, sign, integer or
+//! real exponents, gain, phase, jumps), a typed [`Identification`] out.
+//! The CLI and the Python module only parse and render.
+//!
+//! ## Stages
+//! 1. **Equation error, branch free** ([`super::equation_error`]): every
+//!    measured point satisfies the first-order HB equations whichever branch
+//!    it is on. With phase (used by default when every curve has it) the
+//!    phase convention — lag or lead and a constant offset — is detected
+//!    from the data through a complex gain; the equations are then linear
+//!    least squares at fixed exponents.
+//! 2. **Exponent landscape** ([`super::landscape`]): the equation-error cost
+//!    profiled over a `(ρ, η)` grid of the free exponents (coefficients
+//!    optimised at each node); its grid minima, best first, are the
+//!    candidates. Integer exponents ([`ExponentChoice::Integer`]) use the
+//!    integer nodes only. Profile-likelihood intervals of the exponents come
+//!    from the same map.
+//! 3. **Choices from the data.** The stiffness sign is the sign of the
+//!    equation-error β of each candidate ([`SignChoice::Auto`]). The forcing
+//!    gain (a point of a base-excited continuous structure sees `gain·γ`) is
+//!    freed ([`GainChoice::Auto`]) when freeing it lowers the equation-error
+//!    cost significantly: `F = (C₁ − C_G)/(C_G/(n − p)) > 10.83` (the χ²₁
+//!    0.1 % point) at the best node and the estimate lies inside its
+//!    bounds. Jump residuals ([`super::jumps`]) are added
+//!    ([`JumpChoice::Auto`], λ = [`AUTO_JUMP_WEIGHT`]) when an up-sweep
+//!    shows a measured jump.
+//! 4. **Output error** (Eq 31, branch following, plus phase residuals
+//!    when phase is used — [`super::objective::evaluate_with_phase`]): the
+//!    bounded LM runs from each of the best `refine` candidates; the lowest
+//!    objective wins. The result says whether it converged, which
+//!    parameters sit at bounds and which the data cannot separate
+//!    ([`super::FitResult::warning`]).
+//!
+//! ## Which branch a model point is compared with
+//! The model's sweep follows its own branch in the measured direction and
+//! jumps at its own fold ([`super::objective::model_amplitudes`]). Real
+//! sweeps leave the upper branch *before* the fold (any disturbance near
+//! the fold is enough); the measured points between the measured jump and
+//! the model's fold are then compared with the model's upper branch, and
+//! the misfit there pulls the model's fold down towards the measured jump.
+//! The jump residual states that pull explicitly and continuously. Nothing
+//! in the model family makes a sweep leave early, so on such data the model
+//! fold ends up between the two, and the residuals show it (see the beam
+//! tables in docs/identification.md).
+
+use super::data::Dataset;
+use super::equation_error::{
+    solve_magnitude, solve_phase, wrap, EquationErrorError, EquationErrorFit, PhaseConvention,
+    Prepared, Terms,
+};
+use super::landscape::{landscape, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval};
+use super::levenberg_marquardt::LmOptions;
+use super::models::*;
+use super::objective::{FitSpec, Sign, SpecError, Status};
+use super::{fit_impl, FitError, FitOptions, FitResult};
+
+/// λ of the automatic jump residuals ([`JumpChoice::Auto`]).
+pub const AUTO_JUMP_WEIGHT: f64 = 10.0;
+
+/// F threshold for freeing the gain (χ²₁ 0.1 % point).
+pub const GAIN_F_THRESHOLD: f64 = 10.83;
+
+/// Stiffness sign.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SignChoice {
+    /// From the equation-error estimate of each candidate.
+    #[default]
+    Auto,
+    Hardening,
+    Softening,
+}
+
+/// Forcing gain.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum GainChoice {
+    /// Freed when the data demand it (module docs), else held at 1.
+    #[default]
+    Auto,
+    Fixed(f64),
+    Free,
+}
+
+/// Phase use.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum PhaseChoice {
+    /// Used when every curve has phases, convention detected.
+    #[default]
+    Auto,
+    /// Not used (and dropped from the data).
+    Ignore,
+    /// Used, with this convention.
+    Known(PhaseConvention),
+}
+
+/// Jump residuals.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum JumpChoice {
+    /// λ = [`AUTO_JUMP_WEIGHT`] when an up-sweep has a measured jump.
+    #[default]
+    Auto,
+    Off,
+    Weight(f64),
+}
+
+/// Real or integer exponents.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ExponentChoice {
+    #[default]
+    Real,
+    Integer,
+}
+
+/// What to fit and how. [`FitPlan::new`] gives the defaults that work
+/// without tuning; the `with_*` setters change one thing each.
+///
+/// ```
+/// use nlsdof::identification::{FitPlan, ModelKind, GainChoice};
+/// let plan = FitPlan::new(ModelKind::Duffing)
+///     .with_gain(GainChoice::Fixed(1.0))
+///     .with_grid(32, 32)
+///     .unwrap();
+/// assert_eq!(plan.grid, (32, 32));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitPlan {
+    pub kind: ModelKind,
+    /// Held parameters `(name, value)` (natural units).
+    pub fix: Vec<(String, f64)>,
+    /// Freed parameters (e.g. an exponent the model fixes).
+    pub free: Vec<String>,
+    /// Bounds `(name, min, max)` (for β, κ: of β_ref, κ_ref).
+    pub bounds: Vec<(String, f64, f64)>,
+    pub sign: SignChoice,
+    pub exponents: ExponentChoice,
+    pub gain: GainChoice,
+    pub phase: PhaseChoice,
+    /// Weight `w_φ` of the phase residuals.
+    pub phase_weight: f64,
+    pub jumps: JumpChoice,
+    /// Landscape nodes `(n_ρ, n_η)` over the exponents' bounds.
+    pub grid: (usize, usize),
+    /// Candidates refined by output error.
+    pub refine: usize,
+    /// Extra global-search starts per refinement (1 = none).
+    pub starts: usize,
+    pub seed: u64,
+    pub lm: LmOptions,
+    /// Largest number of points used for the landscape (a regular subsample
+    /// of longer data).
+    pub landscape_points: usize,
+    /// Largest number of points of the output-error fits (a regular
+    /// subsample of longer data, every curve's end points kept); the result
+    /// is then judged (cost, residuals, intervals) on all points.
+    pub refine_points: usize,
+}
+
+impl FitPlan {
+    pub fn new(kind: ModelKind) -> Self {
+        Self {
+            kind,
+            fix: Vec::new(),
+            free: Vec::new(),
+            bounds: Vec::new(),
+            sign: SignChoice::Auto,
+            exponents: ExponentChoice::Real,
+            gain: GainChoice::Auto,
+            phase: PhaseChoice::Auto,
+            phase_weight: 1.0,
+            jumps: JumpChoice::Auto,
+            grid: (41, 41),
+            refine: 3,
+            starts: 1,
+            seed: 1,
+            lm: LmOptions::default(),
+            landscape_points: 2000,
+            refine_points: 1500,
+        }
+    }
+
+    /// Landscape size; both at least 1.
+    pub fn with_grid(mut self, n_rho: usize, n_eta: usize) -> Result<Self, IdentifyError> {
+        if n_rho == 0 || n_eta == 0 {
+            return Err(IdentifyError::Landscape(LandscapeError::EmptyGrid { n_rho, n_eta }));
+        }
+        self.grid = (n_rho, n_eta);
+        Ok(self)
+    }
+
+    pub fn with_gain(mut self, g: GainChoice) -> Self {
+        self.gain = g;
+        self
+    }
+
+    pub fn with_sign(mut self, s: SignChoice) -> Self {
+        self.sign = s;
+        self
+    }
+
+    pub fn with_phase(mut self, p: PhaseChoice) -> Self {
+        self.phase = p;
+        self
+    }
+
+    pub fn with_jumps(mut self, j: JumpChoice) -> Self {
+        self.jumps = j;
+        self
+    }
+
+    pub fn with_exponents(mut self, e: ExponentChoice) -> Self {
+        self.exponents = e;
+        self
+    }
+
+    pub fn with_fixed(mut self, name: &str, value: f64) -> Self {
+        self.fix.push((name.to_string(), value));
+        self
+    }
+}
+
+/// Errors of [`identify`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IdentifyError {
+    #[error(transparent)]
+    Spec(#[from] SpecError),
+    #[error(transparent)]
+    EquationError(#[from] EquationErrorError),
+    #[error(transparent)]
+    Landscape(#[from] LandscapeError),
+    #[error(transparent)]
+    Fit(#[from] FitError),
+    #[error("phase weight {0} must be finite and > 0")]
+    BadPhaseWeight(f64),
+    #[error("jump weight {0} must be finite and >= 0")]
+    BadJumpWeight(f64),
+    #[error("no candidate of the landscape could be refined: {0}")]
+    NoCandidate(String),
+}
+
+/// The gain decision of [`GainChoice::Auto`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GainTest {
+    /// Equation-error gain estimate.
+    pub gain: f64,
+    /// F statistic of freeing it.
+    pub f_statistic: f64,
+    pub freed: bool,
+}
+
+/// One refined candidate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    pub rho: f64,
+    pub eta: f64,
+    /// Equation-error cost at the node.
+    pub ee_cost: f64,
+    /// Sign used for it.
+    pub sign: Sign,
+    /// Objective minimised by output error (incl. jump/phase terms), or the error.
+    pub oe: Result<f64, String>,
+}
+
+/// The outcome of [`identify`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identification {
+    /// The final output-error fit.
+    pub fit: FitResult,
+    /// The structure it was fitted with (sign, gain status, phase weight).
+    pub spec: FitSpec,
+    /// The data as fitted (phases converted to displacement lags, or
+    /// dropped when phase is not used).
+    pub data: Dataset,
+    /// Equation-error fit at the best landscape node.
+    pub equation_error: EquationErrorFit,
+    pub landscape: Landscape,
+    /// Profile-likelihood 95 % intervals (equation error) of ρ and η.
+    pub rho_profile: Option<ProfileInterval>,
+    pub eta_profile: Option<ProfileInterval>,
+    /// The phase convention used (detected or given).
+    pub phase: Option<PhaseConvention>,
+    pub gain_test: Option<GainTest>,
+    /// λ of the jump residuals (0 = none).
+    pub jump_weight: f64,
+    pub candidates: Vec<Candidate>,
+}
+
+/// Regular subsample of at most `max` points per data set (all if smaller),
+/// keeping every curve's first and last point.
+fn subsample(data: &Dataset, max: usize) -> Dataset {
+    let n = data.len();
+    if n <= max || max == 0 {
+        return data.clone();
+    }
+    let stride = n.div_ceil(max);
+    let mut out = data.clone();
+    for c in &mut out.curves {
+        let m = c.omegas.len();
+        let keep: Vec<usize> = (0..m).filter(|&i| i % stride == 0 || i + 1 == m).collect();
+        let pick = |v: &Vec<f64>| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        c.omegas = pick(&c.omegas);
+        c.amplitudes = pick(&c.amplitudes);
+        c.weights = pick(&c.weights);
+        if let Some(p) = &c.phases {
+            c.phases = Some(pick(p));
+        }
+    }
+    out
+}
+
+fn exponent_axis(
+    status: Status,
+    bounds: (f64, f64),
+    n: usize,
+    integer: bool,
+    present: bool,
+) -> Axis {
+    if !present {
+        return Axis::single(0.0);
+    }
+    match status {
+        Status::Fixed(v) => Axis::single(v),
+        Status::Absent => Axis::single(0.0),
+        Status::Free => {
+            if integer {
+                let lo = bounds.0.ceil().max(-2.0);
+                let hi = bounds.1.floor().max(lo);
+                Axis {
+                    min: lo,
+                    max: hi,
+                    n: (hi - lo) as usize + 1,
+                }
+            } else {
+                Axis {
+                    min: bounds.0,
+                    max: bounds.1,
+                    n,
+                }
+            }
+        }
+    }
+}
+
+/// Runs the whole identification (module docs).
+pub fn identify(
+    data: &Dataset,
+    plan: &FitPlan,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Identification, IdentifyError> {
+    if !(plan.phase_weight.is_finite() && plan.phase_weight > 0.0) {
+        return Err(IdentifyError::BadPhaseWeight(plan.phase_weight));
+    }
+    if let JumpChoice::Weight(w) = plan.jumps {
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(IdentifyError::BadJumpWeight(w));
+        }
+    }
+    if plan.grid.0 == 0 || plan.grid.1 == 0 {
+        return Err(LandscapeError::EmptyGrid {
+            n_rho: plan.grid.0,
+            n_eta: plan.grid.1,
+        }
+        .into());
+    }
+    // the structure before any data-driven choice
+    let configure = |sign: Sign| -> Result<FitSpec, IdentifyError> {
+        let mut s = FitSpec::new_signed(plan.kind, data, sign);
+        for (n, lo, hi) in &plan.bounds {
+            s.set_bounds(n, *lo, *hi)?;
+        }
+        for (n, v) in &plan.fix {
+            s.fix(n, *v)?;
+        }
+        for n in &plan.free {
+            s.free(n)?;
+        }
+        match plan.gain {
+            GainChoice::Fixed(g) => s.fix("gain", g)?,
+            GainChoice::Free => s.free("gain")?,
+            GainChoice::Auto => {}
+        }
+        Ok(s)
+    };
+    let spec0 = configure(Sign::Hardening)?;
+    let scales = spec0.scales;
+    let has_phase = data.curves.iter().all(|c| c.phases.is_some());
+    let phase_mode = match plan.phase {
+        PhaseChoice::Ignore => LandscapePhase::Ignore,
+        PhaseChoice::Known(c) => LandscapePhase::Known(c),
+        PhaseChoice::Auto if has_phase => LandscapePhase::Detect { delay: 0.0 },
+        PhaseChoice::Auto => LandscapePhase::Ignore,
+    };
+    if let LandscapePhase::Known(_) = phase_mode {
+        if let Some(c) = data.curves.iter().find(|c| c.phases.is_none()) {
+            return Err(EquationErrorError::MissingPhase {
+                level: c.level.clone(),
+            }
+            .into());
+        }
+    }
+    let sub = subsample(data, plan.landscape_points);
+    let prep = Prepared::new(&sub, scales)?;
+    let stiff = spec0.status[BETA] != Status::Absent;
+    let damp = spec0.status[KAPPA] != Status::Absent;
+    let gain_fixed = match spec0.status[GAIN] {
+        Status::Fixed(g) if plan.gain != GainChoice::Auto => Some(g),
+        _ => None,
+    };
+    let integer = plan.exponents == ExponentChoice::Integer;
+    let rho_axis = exponent_axis(spec0.status[RHO], spec0.bounds[RHO], plan.grid.0, integer, stiff);
+    let eta_axis = exponent_axis(spec0.status[ETA], spec0.bounds[ETA], plan.grid.1, integer, damp);
+    let terms_free = Terms {
+        stiffness: stiff,
+        damping: damp,
+        gain: gain_fixed,
+    };
+    // landscape with the gain free (Auto), falling back to gain = 1
+    let land = match landscape(&prep, terms_free, rho_axis, eta_axis, phase_mode) {
+        Ok(l) => l,
+        Err(e) if plan.gain == GainChoice::Auto => {
+            let t = Terms {
+                gain: Some(1.0),
+                ..terms_free
+            };
+            landscape(&prep, t, rho_axis, eta_axis, phase_mode).map_err(|_| e)?
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let (bi, bj) = land
+        .best()
+        .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
+    let best_ee = land.fit_at(bi, bj).expect("best node solved").clone();
+    if !best_ee.unidentifiable.is_empty() && land.minima.len() == 1 {
+        return Err(EquationErrorError::RankDeficient {
+            names: best_ee.unidentifiable.clone(),
+        }
+        .into());
+    }
+    let phase_conv = best_ee.phase;
+    // gain decision
+    let mut gain_test = None;
+    let gain_status = match plan.gain {
+        GainChoice::Fixed(g) => Status::Fixed(g),
+        GainChoice::Free => Status::Free,
+        GainChoice::Auto => {
+            let (rho, eta) = (land.rho[bi], land.eta[bj]);
+            let fixed_terms = Terms {
+                gain: Some(1.0),
+                ..terms_free
+            };
+            let conv = phase_conv;
+            let fixed = match phase_mode {
+                LandscapePhase::Ignore => solve_magnitude(&prep, fixed_terms, rho, eta, None).map(|x| x.0),
+                _ => solve_phase(&prep, fixed_terms, rho, eta, conv, conv.map_or(0.0, |c| c.delay)),
+            };
+            let free_gain = best_ee.theta[GAIN];
+            let (lo, hi) = spec0.bounds[GAIN];
+            let dof = best_ee.n_residuals.saturating_sub(best_ee.n_unknowns).max(1) as f64;
+            let f = match (&fixed, land.fit_at(bi, bj)) {
+                (Ok(fx), Some(fr)) if fr.n_unknowns > fx.n_unknowns => {
+                    (fx.cost - fr.cost) / (fr.cost / dof).max(f64::MIN_POSITIVE)
+                }
+                _ => 0.0,
+            };
+            let freed = f > GAIN_F_THRESHOLD && free_gain > lo && free_gain < hi;
+            gain_test = Some(GainTest {
+                gain: free_gain,
+                f_statistic: f,
+                freed,
+            });
+            if freed {
+                Status::Free
+            } else {
+                Status::Fixed(1.0)
+            }
+        }
+    };
+    // data as fitted
+    let mut fit_data = data.clone();
+    let use_phase = !matches!(phase_mode, LandscapePhase::Ignore);
+    for c in &mut fit_data.curves {
+        match (&mut c.phases, use_phase, phase_conv) {
+            (Some(p), true, Some(conv)) => {
+                for (k, v) in p.iter_mut().enumerate() {
+                    *v = wrap(conv.lag(*v, c.omegas[k]));
+                }
+            }
+            _ => c.phases = None,
+        }
+    }
+    let jump_weight = match plan.jumps {
+        JumpChoice::Off => 0.0,
+        JumpChoice::Weight(w) => w,
+        JumpChoice::Auto => {
+            if super::jumps::jump_targets(&fit_data).is_empty() {
+                0.0
+            } else {
+                AUTO_JUMP_WEIGHT
+            }
+        }
+    };
+    // refine the best candidates
+    let opts = FitOptions {
+        starts: plan.starts.max(1),
+        seed: plan.seed,
+        lm: plan.lm,
+    };
+    let refine_data = subsample(&fit_data, plan.refine_points);
+    let polish = refine_data.len() < fit_data.len();
+    let mut candidates = Vec::new();
+    let mut best: Option<(FitResult, FitSpec, f64)> = None;
+    let mut last_err = String::new();
+    for &(i, j) in land.minima.iter().take(plan.refine.max(1)) {
+        let Some(ee) = land.fit_at(i, j) else { continue };
+        let sign = match plan.sign {
+            SignChoice::Hardening => Sign::Hardening,
+            SignChoice::Softening => Sign::Softening,
+            SignChoice::Auto => {
+                if ee.theta[BETA] < 0.0 {
+                    Sign::Softening
+                } else {
+                    Sign::Hardening
+                }
+            }
+        };
+        let mut spec = configure(sign)?;
+        spec.status[GAIN] = gain_status;
+        if let Status::Fixed(g) = gain_status {
+            spec.start[GAIN] = g;
+        }
+        spec.phase_weight = use_phase.then_some(plan.phase_weight);
+        start_from(&mut spec, ee, integer);
+        let res = fit_impl(
+            &refine_data,
+            &spec,
+            &opts,
+            (jump_weight > 0.0).then_some(jump_weight),
+            progress,
+        );
+        let oe = match &res {
+            Ok(r) => Ok(r.minima.first().map_or(r.cost, |m| m.cost)),
+            Err(e) => {
+                last_err = e.to_string();
+                Err(e.to_string())
+            }
+        };
+        candidates.push(Candidate {
+            rho: land.rho[i],
+            eta: land.eta[j],
+            ee_cost: land.at(i, j),
+            sign,
+            oe: oe.clone(),
+        });
+        if let (Ok(r), Ok(c)) = (res, oe) {
+            // prefer converged fits, then the lower objective
+            let better = match &best {
+                None => true,
+                Some((b, _, bc)) => (r.converged, -c) > (b.converged, -*bc),
+            };
+            if better {
+                best = Some((r, spec, c));
+            }
+        }
+    }
+    let (mut fit, spec, _) = best.ok_or(IdentifyError::NoCandidate(last_err))?;
+    if polish {
+        // judged on every point at the subsample's optimum
+        let free = spec.free_indices();
+        fit = super::assess(
+            &fit_data,
+            &spec,
+            &free,
+            fit.theta,
+            fit.termination,
+            fit.iterations,
+            fit.minima.clone(),
+            fit.at_bounds.clone(),
+        )?;
+    }
+    Ok(Identification {
+        fit,
+        spec,
+        data: fit_data,
+        rho_profile: land.profile_interval(0),
+        eta_profile: land.profile_interval(1),
+        equation_error: best_ee,
+        landscape: land,
+        phase: if use_phase { phase_conv } else { None },
+        gain_test,
+        jump_weight,
+        candidates,
+    })
+}
+
+/// Sets the output-error start from an equation-error fit (clamped into the
+/// bounds; exponents fixed at integer nodes when `integer`).
+fn start_from(spec: &mut FitSpec, ee: &EquationErrorFit, integer: bool) {
+    let sc = spec.scales;
+    for j in 0..N_PARAMS {
+        if spec.status[j] != Status::Free {
+            continue;
+        }
+        let v = ee.theta[j];
+        let (lo, hi) = spec.bounds[j];
+        spec.start[j] = match j {
+            BETA => {
+                let s = spec.stiffness_sign.factor();
+                let rho = ee.theta[RHO];
+                let g = crate::power_law::g_unchecked(rho) * sc.a_ref.powf(rho);
+                let mag = (v * g).abs().clamp(lo * 1.0001, hi * 0.9999);
+                // β_ref magnitude with the plan's sign
+                s * mag / g
+            }
+            KAPPA => {
+                let eta = ee.theta[ETA];
+                let g = crate::power_law::g_unchecked(eta) * (sc.omega_ref * sc.a_ref).powf(eta);
+                (v * g).clamp(lo * 1.0001, hi * 0.9999) / g
+            }
+            _ => v.clamp(
+                if lo > 0.0 { lo * 1.0001 } else { lo },
+                if hi > 0.0 { hi * 0.9999 } else { hi },
+            ),
+        };
+    }
+    if integer {
+        for j in [RHO, ETA] {
+            if spec.status[j] == Status::Free {
+                spec.status[j] = Status::Fixed(ee.theta[j]);
+                spec.start[j] = ee.theta[j];
+            }
+        }
+    }
+}

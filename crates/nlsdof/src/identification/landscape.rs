@@ -1,0 +1,311 @@
+//! The exponent landscape: the equation-error cost profiled over a
+//! `(ρ, η)` grid, the coefficients optimised at every node.
+//!
+//! ```text
+//! P(ρ_i, η_j) = min over (α, β, δ, κ[, G]) of  Σ r_EE²(ρ_i, η_j)
+//! ```
+//!
+//! (see [`super::equation_error`] for `r_EE`). With phase each node is a
+//! closed-form linear least-squares solve; without phase a bounded LM run,
+//! warm-started from the previous node of the same η row (rows run in
+//! parallel, nodes of a row in order, so the result does not depend on the
+//! number of threads). Grid minima (nodes below all their finite
+//! neighbours) are the candidate exponent pairs the output-error refinement
+//! starts from: a blind multistart over the exponents is replaced by a map
+//! of where the minima are.
+//!
+//! **Profile-likelihood intervals** for each exponent (of the equation-error
+//! criterion): `{μ : P_μ(μ) − P_min ≤ s² χ²₁(0.95)}` with the profile
+//! `P_μ(μ) = min over the other exponent of P`, `s² = P_min/(n − p)`,
+//! located by linear interpolation between grid nodes. They are beside, not
+//! instead of, the linearised intervals of the output-error fit; an interval
+//! that reaches the grid edge is reported open on that side.
+
+use super::equation_error::{
+    solve_magnitude, solve_phase, EquationErrorError, EquationErrorFit, PhaseConvention, Prepared,
+    Terms,
+};
+use rayon::prelude::*;
+
+/// χ²₁ 95 % quantile.
+pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
+
+/// One grid axis: `n` values from `min` to `max` inclusive (a single value
+/// `min` when `n == 1`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Axis {
+    pub min: f64,
+    pub max: f64,
+    pub n: usize,
+}
+
+impl Axis {
+    pub fn values(&self) -> Vec<f64> {
+        if self.n <= 1 {
+            return vec![self.min];
+        }
+        (0..self.n)
+            .map(|i| self.min + (self.max - self.min) * i as f64 / (self.n - 1) as f64)
+            .collect()
+    }
+
+    pub fn single(v: f64) -> Self {
+        Self {
+            min: v,
+            max: v,
+            n: 1,
+        }
+    }
+}
+
+/// How the landscape uses phase.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LandscapePhase {
+    Ignore,
+    Known(PhaseConvention),
+    Detect { delay: f64 },
+}
+
+/// The profiled cost over the exponent grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Landscape {
+    /// ρ values (columns) and η values (rows).
+    pub rho: Vec<f64>,
+    pub eta: Vec<f64>,
+    /// Cost, row-major `cost[j * rho.len() + i]` at `(rho[i], eta[j])`;
+    /// `NaN` where the node could not be solved.
+    pub cost: Vec<f64>,
+    /// The node fits (None where unsolved).
+    pub fits: Vec<Option<EquationErrorFit>>,
+    /// Grid minima `(i, j)`, lowest cost first.
+    pub minima: Vec<(usize, usize)>,
+    /// Whether phase was used.
+    pub with_phase: bool,
+}
+
+/// A profile-likelihood interval (`None` bound = open at the grid edge).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileInterval {
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+}
+
+/// Errors of the landscape.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LandscapeError {
+    #[error("landscape grid of zero size ({n_rho} x {n_eta})")]
+    EmptyGrid { n_rho: usize, n_eta: usize },
+    #[error("landscape axis {name} = [{min}, {max}] is invalid (need finite values > -3, min <= max)")]
+    BadAxis {
+        name: &'static str,
+        min: f64,
+        max: f64,
+    },
+    #[error("no node of the exponent landscape could be solved: {0}")]
+    NothingSolved(EquationErrorError),
+}
+
+/// Computes the landscape over `rho × eta`.
+pub fn landscape(
+    prep: &Prepared,
+    terms: Terms,
+    rho: Axis,
+    eta: Axis,
+    phase: LandscapePhase,
+) -> Result<Landscape, LandscapeError> {
+    if rho.n == 0 || eta.n == 0 {
+        return Err(LandscapeError::EmptyGrid {
+            n_rho: rho.n,
+            n_eta: eta.n,
+        });
+    }
+    for (name, a) in [("rho", rho), ("eta", eta)] {
+        if !(a.min.is_finite() && a.max.is_finite() && a.min > -3.0 && a.min <= a.max) {
+            return Err(LandscapeError::BadAxis {
+                name,
+                min: a.min,
+                max: a.max,
+            });
+        }
+    }
+    let rv = rho.values();
+    let ev = eta.values();
+    let nr = rv.len();
+    let rows: Vec<Vec<Result<EquationErrorFit, EquationErrorError>>> = ev
+        .par_iter()
+        .map(|&e| {
+            let mut warm: Option<Vec<f64>> = None;
+            rv.iter()
+                .map(|&r| match phase {
+                    LandscapePhase::Ignore => {
+                        let res = solve_magnitude(prep, terms, r, e, warm.as_deref())
+                            .or_else(|_| solve_magnitude(prep, terms, r, e, None));
+                        // keep the better of warm and cold at the first node of a row
+                        match res {
+                            Ok((fit, u)) => {
+                                warm = Some(u);
+                                Ok(fit)
+                            }
+                            Err(err) => {
+                                warm = None;
+                                Err(err)
+                            }
+                        }
+                    }
+                    LandscapePhase::Known(c) => solve_phase(prep, terms, r, e, Some(c), c.delay),
+                    LandscapePhase::Detect { delay } => solve_phase(prep, terms, r, e, None, delay),
+                })
+                .collect()
+        })
+        .collect();
+    let mut cost = Vec::with_capacity(nr * ev.len());
+    let mut fits = Vec::with_capacity(nr * ev.len());
+    let mut first_err = None;
+    for row in rows {
+        for f in row {
+            match f {
+                // a node whose coefficients the data cannot separate is not
+                // a candidate (its cost can be an artefact of the degeneracy)
+                Ok(f) if !f.unidentifiable.is_empty() => {
+                    first_err.get_or_insert(EquationErrorError::RankDeficient {
+                        names: f.unidentifiable.clone(),
+                    });
+                    cost.push(f64::NAN);
+                    fits.push(None);
+                }
+                Ok(f) => {
+                    cost.push(f.cost);
+                    fits.push(Some(f));
+                }
+                Err(e) => {
+                    first_err.get_or_insert(e);
+                    cost.push(f64::NAN);
+                    fits.push(None);
+                }
+            }
+        }
+    }
+    if fits.iter().all(|f| f.is_none()) {
+        return Err(LandscapeError::NothingSolved(
+            first_err.expect("an error for every unsolved node"),
+        ));
+    }
+    let minima = grid_minima(&cost, nr, ev.len());
+    Ok(Landscape {
+        rho: rv,
+        eta: ev,
+        cost,
+        fits,
+        minima,
+        with_phase: !matches!(phase, LandscapePhase::Ignore),
+    })
+}
+
+/// Nodes whose finite cost is below (ties: not above, lower index wins) all
+/// finite 8-neighbours, lowest first.
+pub fn grid_minima(cost: &[f64], nr: usize, ne: usize) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    for j in 0..ne {
+        for i in 0..nr {
+            let c = cost[j * nr + i];
+            if !c.is_finite() {
+                continue;
+            }
+            let mut is_min = true;
+            'nb: for dj in -1i64..=1 {
+                for di in -1i64..=1 {
+                    if di == 0 && dj == 0 {
+                        continue;
+                    }
+                    let (ii, jj) = (i as i64 + di, j as i64 + dj);
+                    if ii < 0 || jj < 0 || ii >= nr as i64 || jj >= ne as i64 {
+                        continue;
+                    }
+                    let k = jj as usize * nr + ii as usize;
+                    let cn = cost[k];
+                    if cn.is_finite() && (cn < c || (cn == c && k < j * nr + i)) {
+                        is_min = false;
+                        break 'nb;
+                    }
+                }
+            }
+            if is_min {
+                out.push((i, j));
+            }
+        }
+    }
+    out.sort_by(|a, b| cost[a.1 * nr + a.0].total_cmp(&cost[b.1 * nr + b.0]));
+    out
+}
+
+impl Landscape {
+    pub fn at(&self, i: usize, j: usize) -> f64 {
+        self.cost[j * self.rho.len() + i]
+    }
+
+    pub fn fit_at(&self, i: usize, j: usize) -> Option<&EquationErrorFit> {
+        self.fits[j * self.rho.len() + i].as_ref()
+    }
+
+    /// The lowest node.
+    pub fn best(&self) -> Option<(usize, usize)> {
+        self.minima.first().copied()
+    }
+
+    /// Profile-likelihood intervals of ρ (`which = 0`) and η (`which = 1`)
+    /// (module docs); `None` if that axis has a single value.
+    pub fn profile_interval(&self, which: usize) -> Option<ProfileInterval> {
+        let (nr, ne) = (self.rho.len(), self.eta.len());
+        let (axis, n_other) = if which == 0 {
+            (&self.rho, ne)
+        } else {
+            (&self.eta, nr)
+        };
+        if axis.len() < 2 {
+            return None;
+        }
+        let (bi, bj) = self.best()?;
+        let best = self.fit_at(bi, bj)?;
+        let dof = best.n_residuals.saturating_sub(best.n_unknowns + 2).max(1);
+        let cmin = best.cost;
+        let thr = cmin + cmin / dof as f64 * CHI2_1_95;
+        let prof: Vec<f64> = (0..axis.len())
+            .map(|k| {
+                (0..n_other)
+                    .map(|o| if which == 0 { self.at(k, o) } else { self.at(o, k) })
+                    .filter(|c| c.is_finite())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        let kb = if which == 0 { bi } else { bj };
+        let cross = |k0: usize, k1: usize| {
+            // linear interpolation of the threshold crossing between nodes
+            let (p0, p1) = (prof[k0], prof[k1]);
+            let t = if p1.is_finite() && p1 != p0 {
+                ((thr - p0) / (p1 - p0)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            axis[k0] + t * (axis[k1] - axis[k0])
+        };
+        let mut lower = None;
+        let mut k = kb;
+        while k > 0 {
+            if !(prof[k - 1] <= thr) {
+                lower = Some(cross(k, k - 1));
+                break;
+            }
+            k -= 1;
+        }
+        let mut upper = None;
+        let mut k = kb;
+        while k + 1 < axis.len() {
+            if !(prof[k + 1] <= thr) {
+                upper = Some(cross(k, k + 1));
+                break;
+            }
+            k += 1;
+        }
+        Some(ProfileInterval { lower, upper })
+    }
+}

@@ -318,3 +318,180 @@ fn clamped_beam_duffing_fit_predicts_jumps() {
     }
     assert!(worst < 2.5, "worst jump-frequency error {worst:.2} %");
 }
+
+/// The default staged fit (issue 10): stages and honest-convergence keys in
+/// the JSON, the landscape as JSON, SVG and PNG, the phase columns used and
+/// their convention detected, bad input one line and nothing written.
+#[test]
+fn staged_fit_reports_and_landscape() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, truth) = write_csv(dir.path());
+    for (ext, magic) in [
+        ("json", &b"{"[..]),
+        ("svg", &b"<svg"[..]),
+        ("png", &b"\x89PNG"[..]),
+    ] {
+        let land = dir.path().join(format!("land.{ext}"));
+        let o = Command::cargo_bin("nlsdof")
+            .unwrap()
+            .args([
+                "fit",
+                csv.to_str().unwrap(),
+                "--model",
+                "generalised-stiffness",
+                "--grid",
+                "12x1",
+                "--json",
+                "--landscape",
+            ])
+            .arg(&land)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(&land).unwrap();
+        assert!(bytes.starts_with(magic), "{ext}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["converged"], true);
+        assert!(v["at_bounds"].as_array().unwrap().is_empty());
+        assert!(v["unidentifiable"].as_array().unwrap().is_empty());
+        assert_eq!(v["intervals_valid"], true);
+        let id = &v["identification"];
+        assert!(id["equation_error"]["cost"].is_number());
+        assert!(!id["landscape"]["minima"].as_array().unwrap().is_empty());
+        // noise-free Duffing data: rho = 2 recovered
+        assert!((v["theta"][3].as_f64().unwrap() - 2.0).abs() < 1e-5);
+        assert!((v["theta"][0].as_f64().unwrap() / truth.alpha - 1.0).abs() < 1e-7);
+        if ext == "json" {
+            let g: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+            assert_eq!(g["rho"].as_array().unwrap().len(), 12);
+            assert_eq!(g["cost"].as_array().unwrap().len(), 1);
+        }
+    }
+    // phase columns in a lead convention with a 90 degree offset: detected
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let wn = TWO_PI * 10.0;
+    let m = NormalisedModel {
+        alpha: wn * wn,
+        delta: 0.02 * wn,
+        beta: 2.5e6,
+        rho: 2.0,
+        kappa: 0.0,
+        eta: 0.0,
+    };
+    let mut s = String::from("level,gamma,f_hz,amplitude,sweep,phase_deg\n");
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (g, fhz): (f64, f64) = (f[1].parse().unwrap(), f[2].parse().unwrap());
+        let r = ForcedResponse::from_normalised(&m, g, Formulation::HarmonicBalance).unwrap();
+        let sw = r.sweep(&[TWO_PI * fhz], SweepDirection::Up).unwrap();
+        let lead = 90.0 - sw.points[0].phase.to_degrees();
+        writeln!(s, "{line},{lead}").unwrap();
+    }
+    let pcsv = dir.path().join("phase.csv");
+    std::fs::write(&pcsv, s).unwrap();
+    let o = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args([
+            "fit",
+            pcsv.to_str().unwrap(),
+            "--model",
+            "duffing",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let pc = &v["identification"]["phase_convention"];
+    assert_eq!(pc["sign"], "lead");
+    assert!(
+        (pc["offset_deg"].as_f64().unwrap() - 90.0).abs() < 1e-3,
+        "{pc}"
+    );
+    assert!(v["phase_cost"].as_f64().unwrap() < 1e-12);
+    // bad input: one line, exit 2, nothing written
+    let out = dir.path().join("never.toml");
+    for (args, needle) in [
+        (vec!["--grid", "0"], "--grid"),
+        (vec!["--grid", "5x0"], "--grid"),
+        (vec!["--landscape", "x.txt"], ".json, .svg or .png"),
+        (vec!["--phase-weight", "0"], "--phase-weight"),
+        (
+            vec!["--no-phase", "--phase-convention", "lag,0"],
+            "conflicts",
+        ),
+        (vec!["--phase-convention", "sideways,0"], "lag or lead"),
+    ] {
+        let o = Command::cargo_bin("nlsdof")
+            .unwrap()
+            .args(["fit", pcsv.to_str().unwrap(), "--out"])
+            .arg(&out)
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.starts_with("nlsdof: error:") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+    // phase outside [-360, 360] degrees
+    let bad = dir.path().join("badphase.csv");
+    let mut t = std::fs::read_to_string(&pcsv).unwrap();
+    let first_row_end = t.find('\n').unwrap() + 1;
+    let row_end = first_row_end + t[first_row_end..].find('\n').unwrap();
+    let row = t[first_row_end..row_end].to_string();
+    let mut fields: Vec<String> = row.split(',').map(String::from).collect();
+    *fields.last_mut().unwrap() = "400".into();
+    t.replace_range(first_row_end..row_end, &fields.join(","));
+    std::fs::write(&bad, t).unwrap();
+    let o = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args(["fit", bad.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("phase"), "{err}");
+    assert!(!out.exists());
+}
+
+/// A fit that stops on max-iterations says so on its first line and shows
+/// no intervals.
+#[test]
+fn unconverged_fit_says_so_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, _) = write_csv(dir.path());
+    // the stiffness exponent boxed in [7.5, 8] although the data are
+    // Duffing (rho = 2): the fit ends at the bound
+    let o = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args([
+            "fit",
+            csv.to_str().unwrap(),
+            "--model",
+            "generalised-stiffness",
+            "--grid",
+            "1",
+            "--bounds",
+        ])
+        .arg({
+            let b = dir.path().join("b.toml");
+            std::fs::write(&b, "rho = [7.5, 8]\n").unwrap();
+            b
+        })
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let first = text.lines().next().unwrap();
+    assert!(
+        first.starts_with("WARNING:") && first.contains("rho"),
+        "{text}"
+    );
+    assert!(text.contains("intervals: not shown"), "{text}");
+}

@@ -33,8 +33,9 @@ fn data(
         .collect();
     let mut recs = Vec::new();
     for (l, &g) in gammas.iter().enumerate() {
-        let r = ForcedResponse::from_normalised(&model, theta[GAIN] * g, Formulation::HarmonicBalance)
-            .unwrap();
+        let r =
+            ForcedResponse::from_normalised(&model, theta[GAIN] * g, Formulation::HarmonicBalance)
+                .unwrap();
         for &d in dirs {
             let sw = r.sweep(&omegas, d).unwrap();
             for p in &sw.points {
@@ -89,7 +90,12 @@ fn equation_error_with_phase_is_exact_and_detects_the_convention() {
     assert_eq!(conv.sign, -1.0);
     assert!((conv.offset - 120f64.to_radians()).abs() < 1e-9, "{conv:?}");
     for j in [ALPHA, DELTA, BETA, KAPPA, GAIN] {
-        assert!(rel(f.theta[j], tg[j]) < 1e-8, "{j}: {} vs {}", f.theta[j], tg[j]);
+        assert!(
+            rel(f.theta[j], tg[j]) < 1e-8,
+            "{j}: {} vs {}",
+            f.theta[j],
+            tg[j]
+        );
     }
     // known convention, gain held: same coefficients
     let held = Terms {
@@ -127,7 +133,14 @@ fn equation_error_without_phase_is_exact() {
             ModelKind::Generalised,
         ),
     ] {
-        let d = data(&t, &[1.0, 2.0, 3.0], (8.0, 12.0), 100, &[SweepDirection::Up], None);
+        let d = data(
+            &t,
+            &[1.0, 2.0, 3.0],
+            (8.0, 12.0),
+            100,
+            &[SweepDirection::Up],
+            None,
+        );
         let spec = FitSpec::new(kind, &d);
         let prep = Prepared::new(&d, spec.scales).unwrap();
         let terms = Terms {
@@ -150,7 +163,14 @@ fn equation_error_without_phase_is_exact() {
 #[test]
 fn phase_jacobian_matches_finite_differences() {
     let t = [3900.0, 1.2, 3.0e6, 2.3, 0.04, 0.7, 1.1];
-    let mut d = data(&t, &[1.0, 2.5], (8.0, 13.0), 60, &[SweepDirection::Up], Some((1.0, 0.0)));
+    let mut d = data(
+        &t,
+        &[1.0, 2.5],
+        (8.0, 13.0),
+        60,
+        &[SweepDirection::Up],
+        Some((1.0, 0.0)),
+    );
     // perturb the data so that residuals are not zero
     for c in &mut d.curves {
         for (k, a) in c.amplitudes.iter_mut().enumerate() {
@@ -171,7 +191,9 @@ fn phase_jacobian_matches_finite_differences() {
         for i in n..rp.len() {
             let fd = (rp[i] - rm[i]) / (2.0 * h);
             let an = jac[i][j];
-            let scale = jac[i].iter().fold(0.0f64, |m, v| m.max(v.abs() * t[j].abs().max(1e-3)))
+            let scale = jac[i]
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs() * t[j].abs().max(1e-3)))
                 / t[j].abs().max(1e-3);
             assert!(
                 (fd - an).abs() <= 1e-5 * scale.max(1e-12) + 1e-9,
@@ -184,7 +206,14 @@ fn phase_jacobian_matches_finite_differences() {
 #[test]
 fn landscape_minimum_is_at_the_truth_and_profile_covers_it() {
     let t = duffing_quadratic();
-    let d = data(&t, &[0.5, 1.0, 2.0], (8.0, 14.0), 100, &[SweepDirection::Up], Some((1.0, 0.0)));
+    let d = data(
+        &t,
+        &[0.5, 1.0, 2.0],
+        (8.0, 14.0),
+        100,
+        &[SweepDirection::Up],
+        Some((1.0, 0.0)),
+    );
     let spec = FitSpec::new(ModelKind::Generalised, &d);
     let prep = Prepared::new(&d, spec.scales).unwrap();
     let terms = Terms {
@@ -192,20 +221,45 @@ fn landscape_minimum_is_at_the_truth_and_profile_covers_it() {
         damping: true,
         gain: Some(1.0),
     };
-    let rho = Axis { min: 0.0, max: 5.0, n: 21 }; // 2.0 is a node
-    let eta = Axis { min: -1.0, max: 4.0, n: 21 }; // 1.0 is a node
-    let l = landscape(&prep, terms, rho, eta, LandscapePhase::Detect { delay: 0.0 }).unwrap();
+    let rho = Axis {
+        min: 0.0,
+        max: 5.0,
+        n: 21,
+    }; // 2.0 is a node
+    let eta = Axis {
+        min: -1.0,
+        max: 4.0,
+        n: 21,
+    }; // 1.0 is a node
+    let l = landscape(
+        &prep,
+        terms,
+        rho,
+        eta,
+        LandscapePhase::Detect { delay: 0.0 },
+    )
+    .unwrap();
     let (i, j) = l.best().unwrap();
-    assert!((l.rho[i] - 2.0).abs() < 1e-12 && (l.eta[j] - 1.0).abs() < 1e-12, "{:?}", (l.rho[i], l.eta[j]));
+    assert!(
+        (l.rho[i] - 2.0).abs() < 1e-12 && (l.eta[j] - 1.0).abs() < 1e-12,
+        "{:?}",
+        (l.rho[i], l.eta[j])
+    );
     let p = l.profile_interval(0).unwrap();
     assert!(p.lower.unwrap() <= 2.0 && 2.0 <= p.upper.unwrap());
     // zero-size grid
-    let z = Axis { min: 0.0, max: 5.0, n: 0 };
+    let z = Axis {
+        min: 0.0,
+        max: 5.0,
+        n: 0,
+    };
     assert!(matches!(
         landscape(&prep, terms, z, eta, LandscapePhase::Ignore),
         Err(landscape::LandscapeError::EmptyGrid { n_rho: 0, .. })
     ));
-    assert!(FitPlan::new(ModelKind::Generalised).with_grid(0, 4).is_err());
+    assert!(FitPlan::new(ModelKind::Generalised)
+        .with_grid(0, 4)
+        .is_err());
 }
 
 /// The first example: Duffing + quadratic damping with jumps, up and
@@ -226,7 +280,12 @@ fn default_fit_recovers_duffing_quadratic_with_jumps() {
     let r = identify(&d, &FitPlan::new(ModelKind::DuffingQuadratic), &|| {}).unwrap();
     assert!(!r.fit.levels.is_empty());
     for j in [ALPHA, DELTA, BETA, KAPPA] {
-        assert!(rel(r.fit.theta[j], t[j]) < 1e-6, "{j}: {} vs {}", r.fit.theta[j], t[j]);
+        assert!(
+            rel(r.fit.theta[j], t[j]) < 1e-6,
+            "{j}: {} vs {}",
+            r.fit.theta[j],
+            t[j]
+        );
     }
     // and the generalised model finds the exponents
     let r = identify(&d, &FitPlan::new(ModelKind::Generalised), &|| {}).unwrap();
@@ -257,7 +316,14 @@ fn default_fit_chooses_softening_from_the_data() {
 #[test]
 fn a_fit_stopped_early_says_so() {
     let t = duffing_quadratic();
-    let d = data(&t, &[0.5, 1.0, 2.0], (8.0, 14.0), 80, &[SweepDirection::Up], None);
+    let d = data(
+        &t,
+        &[0.5, 1.0, 2.0],
+        (8.0, 14.0),
+        80,
+        &[SweepDirection::Up],
+        None,
+    );
     let mut plan = FitPlan::new(ModelKind::Generalised);
     plan.lm.max_iterations = 1;
     plan.grid = (5, 5); // coarse: the start is far from the optimum
@@ -287,7 +353,14 @@ fn bad_input_is_a_typed_error() {
     let e = identify(&d, &FitPlan::new(ModelKind::Duffing), &|| {}).unwrap_err();
     assert!(e.to_string().contains("cannot separate"), "{e}");
     // phase outside [-2 pi, 2 pi]
-    let mut d = data(&t, &[1.0, 2.0], (8.0, 12.0), 30, &[SweepDirection::Up], Some((1.0, 0.0)));
+    let mut d = data(
+        &t,
+        &[1.0, 2.0],
+        (8.0, 12.0),
+        30,
+        &[SweepDirection::Up],
+        Some((1.0, 0.0)),
+    );
     d.curves[0].phases.as_mut().unwrap()[3] = 10.0;
     let e = identify(&d, &FitPlan::new(ModelKind::Duffing), &|| {}).unwrap_err();
     assert!(e.to_string().contains("phase"), "{e}");

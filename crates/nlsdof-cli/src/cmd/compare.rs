@@ -24,9 +24,10 @@ pub struct Args {
     /// Estimate parameters the models hold (e.g. gain): name,..
     #[arg(long, value_name = "NAME,..")]
     pub free: Option<String>,
-    /// Global-search starts per model.
-    #[arg(long, default_value_t = 32)]
-    pub starts: usize,
+    /// Extra global-search starts per refined candidate (1 = none; with --sign
+    /// hardening|softening|auto: starts of the classic multistart, 32 if not given).
+    #[arg(long)]
+    pub starts: Option<usize>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Mass m, kg (physical values in the JSON).
@@ -53,20 +54,51 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if kinds.is_empty() {
         return Err(CliError::Usage("--models is empty".into()));
     }
-    if args.starts == 0 || args.starts > 100_000 {
+    let staged = sign == super::phase_resonance::SignArg::Data;
+    let starts = args.starts.unwrap_or(if staged { 1 } else { 32 });
+    if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
-            "--starts {} is not allowed: use 1..=100000",
-            args.starts
+            "--starts {starts} is not allowed: use 1..=100000"
         )));
     }
     let mass = super::fit::resolve_mass(args.mass, None, None)?;
     let opts = FitOptions {
-        starts: args.starts,
+        starts,
         seed: args.seed,
         ..FitOptions::default()
     };
-    let mut results = Vec::new();
+    // (data as fitted, result) per model
+    let mut results: Vec<(
+        nlsdof::identification::Dataset,
+        nlsdof::identification::FitResult,
+    )> = Vec::new();
     for kind in kinds {
+        if staged {
+            // the default staged fit (equation error, landscape, output error)
+            let mut plan = nlsdof::identification::FitPlan::new(kind);
+            plan.starts = starts;
+            plan.seed = args.seed;
+            if let Some(list) = &args.free {
+                for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+                    let n = name.trim().to_ascii_lowercase();
+                    if n == "gain" {
+                        plan.gain = nlsdof::identification::GainChoice::Free;
+                        continue;
+                    }
+                    // a parameter a model does not have is simply not freed for it
+                    let mut probe = FitSpec::new(kind, &data);
+                    match probe.free(&n) {
+                        Ok(()) => plan.free.push(n),
+                        Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
+                        Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
+                    }
+                }
+            }
+            let id = nlsdof::identification::identify(&data, &plan, &|| {})
+                .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
+            results.push((id.data, id.fit));
+            continue;
+        }
         let configure = |spec: &mut FitSpec| -> Result<(), CliError> {
             if let Some(list) = &args.free {
                 for name in list.split(',').filter(|s| !s.trim().is_empty()) {
@@ -81,12 +113,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         };
         let (r, _) = super::phase_resonance::fit_sweep_signed(&data, kind, sign, &configure, &opts)
             .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
-        results.push(r);
+        results.push((data.clone(), r));
     }
     if args.json {
         let v: Vec<_> = results
             .iter()
-            .map(|r| result_json(&data, r, mass))
+            .map(|(d, r)| result_json(d, r, mass))
             .collect::<Result<_, _>>()?;
         println!(
             "{}",
@@ -97,11 +129,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut s = String::new();
     writeln!(
         s,
-        "{:<22} {:>4} {:>14} {:>12} {:>12} {:>12}  parameters (mass-normalised)",
-        "model", "p", "cost", "RMS a/gamma", "AIC", "BIC"
+        "{:<22} {:>4} {:>14} {:>12} {:>12} {:>12}  {:<14} parameters (mass-normalised)",
+        "model", "p", "cost", "RMS a/gamma", "AIC", "BIC", "status"
     )
     .ok();
-    for r in &results {
+    for (_, r) in &results {
         let params: Vec<String> = (0..N_PARAMS)
             .filter(|&j| r.status[j] != Status::Absent)
             .map(|j| {
@@ -113,22 +145,37 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 )
             })
             .collect();
+        let status = if !r.converged {
+            "NOT CONVERGED"
+        } else if !r.at_bounds.is_empty() {
+            "AT BOUNDS"
+        } else if !r.unidentifiable.is_empty() {
+            "UNIDENTIFIABLE"
+        } else {
+            "ok"
+        };
         writeln!(
             s,
-            "{:<22} {:>4} {:>14.6e} {:>12.4e} {:>12.2} {:>12.2}  {}",
+            "{:<22} {:>4} {:>14.6e} {:>12.4e} {:>12.2} {:>12.2}  {:<14} {}",
             r.kind.name(),
             r.n_free,
             r.cost,
             r.rms_normalised(),
             r.aic(),
             r.bic(),
+            status,
             params.join(" ")
         )
         .ok();
     }
     s.push_str("(* = held fixed)\n");
-    for r in &results {
-        s.push_str(&pq_text(&data, r)?);
+    for (_, r) in &results {
+        if let Some(w) = r.warning() {
+            writeln!(s, "{w}").ok();
+        }
+    }
+    for (d, r) in &results {
+        s.push_str(&pq_text(d, r)?);
     }
     print!("{s}");
     Ok(())

@@ -6,8 +6,8 @@ use crate::error::CliError;
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{
     fit, identify, integer_search, phase_quadrature_table, predicted_jumps, Dataset, FitOptions,
-    FitPlan, FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind,
-    PhaseChoice, PhaseConvention, SignChoice, Status, N_PARAMS, PARAM_NAMES,
+    FitPlan, FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
+    PhaseConvention, SignChoice, Status, N_PARAMS, PARAM_NAMES,
 };
 use nlsdof::{Model, SweepDirection};
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
@@ -140,7 +140,11 @@ pub struct Args {
     pub no_phase: bool,
     /// State the phase convention instead of detecting it: lag|lead,OFFSET_DEG[,DELAY_S]
     /// (measured phase = +-lag + offset + 2 pi f delay).
-    #[arg(long = "phase-convention", value_name = "lag|lead,OFFSET_DEG[,DELAY_S]", allow_hyphen_values = true)]
+    #[arg(
+        long = "phase-convention",
+        value_name = "lag|lead,OFFSET_DEG[,DELAY_S]",
+        allow_hyphen_values = true
+    )]
     pub phase_convention: Option<String>,
     /// Weight of the phase residuals relative to the amplitude residuals.
     #[arg(long = "phase-weight", value_name = "W", default_value_t = 1.0)]
@@ -421,7 +425,9 @@ pub fn parse_phase_convention(s: &str) -> Result<PhaseConvention, CliError> {
         "lead" => -1.0,
         _ => return Err(bad("first field must be lag or lead")),
     };
-    let offset: f64 = parts[1].parse().map_err(|_| bad("offset is not a number"))?;
+    let offset: f64 = parts[1]
+        .parse()
+        .map_err(|_| bad("offset is not a number"))?;
     let delay: f64 = match parts.get(2) {
         Some(d) => d.parse().map_err(|_| bad("delay is not a number"))?,
         None => 0.0,
@@ -860,7 +866,11 @@ pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         mass,
     );
     if res.uncertainty.is_some() && !res.intervals_valid() {
-        writeln!(s, "intervals: not shown (the fit is not trustworthy, see the first line)").ok();
+        writeln!(
+            s,
+            "intervals: not shown (the fit is not trustworthy, see the first line)"
+        )
+        .ok();
     } else if res.uncertainty.is_none() {
         writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
     }

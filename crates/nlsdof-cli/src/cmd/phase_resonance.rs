@@ -560,15 +560,15 @@ pub fn run_compare_args(args: &super::compare::Args) -> Result<(), CliError> {
     if kinds.is_empty() {
         return Err(CliError::Usage("--models is empty".into()));
     }
-    if args.starts == 0 || args.starts > 100_000 {
+    let starts = args.starts.unwrap_or(32);
+    if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
-            "--starts {} is not allowed: use 1..=100000",
-            args.starts
+            "--starts {starts} is not allowed: use 1..=100000"
         )));
     }
     let mass = resolve_mass(args.mass, None, None)?;
     let opts = PrFitOptions {
-        starts: args.starts,
+        starts,
         seed: args.seed,
         frequency_weight: args.pr.frequency_weight,
         ..PrFitOptions::default()

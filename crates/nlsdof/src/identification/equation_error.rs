@@ -187,7 +187,9 @@ impl Prepared {
             for i in 0..c.omegas.len() {
                 let (w, a) = (c.omegas[i], c.amplitudes[i]);
                 let psi = c.phases.as_ref().map_or(0.0, |p| p[i]);
-                if c.phases.is_some() && !(psi.is_finite() && psi.abs() <= 2.0 * std::f64::consts::PI + 1e-9) {
+                if c.phases.is_some()
+                    && !(psi.is_finite() && psi.abs() <= 2.0 * std::f64::consts::PI + 1e-9)
+                {
                     return Err(EquationErrorError::BadPhase {
                         level: c.level.clone(),
                         value: psi,
@@ -313,12 +315,18 @@ impl SmallLs {
     fn solve(&self) -> (Option<Vec<f64>>, Vec<usize>) {
         let n = self.n;
         let d: Vec<f64> = (0..n).map(|k| self.ata[k][k].sqrt()).collect();
-        let dead: Vec<usize> = (0..n).filter(|&k| !(d[k] > 0.0 && d[k].is_finite())).collect();
+        let dead: Vec<usize> = (0..n)
+            .filter(|&k| !(d[k] > 0.0 && d[k].is_finite()))
+            .collect();
         if !dead.is_empty() {
             return (None, dead);
         }
         let m = nalgebra::DMatrix::from_fn(n, n, |i, j| {
-            let v = if i >= j { self.ata[i][j] } else { self.ata[j][i] };
+            let v = if i >= j {
+                self.ata[i][j]
+            } else {
+                self.ata[j][i]
+            };
             v / (d[i] * d[j])
         });
         let eig = m.clone().symmetric_eigen();
@@ -405,7 +413,11 @@ pub fn solve_phase(
 /// the points (the physical sign of the phase convention).
 fn damping_positive(prep: &Prepared, f: &EquationErrorFit) -> bool {
     let th = &f.theta;
-    let ge = if th[KAPPA] != 0.0 { g_unchecked(th[ETA]) } else { 0.0 };
+    let ge = if th[KAPPA] != 0.0 {
+        g_unchecked(th[ETA])
+    } else {
+        0.0
+    };
     let s: f64 = prep
         .points
         .iter()

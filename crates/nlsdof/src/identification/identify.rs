@@ -49,7 +49,9 @@ use super::equation_error::{
     solve_magnitude, solve_phase, wrap, EquationErrorError, EquationErrorFit, PhaseConvention,
     Prepared, Terms,
 };
-use super::landscape::{landscape, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval};
+use super::landscape::{
+    landscape, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval,
+};
 use super::levenberg_marquardt::LmOptions;
 use super::models::*;
 use super::objective::{FitSpec, Sign, SpecError, Status};
@@ -181,7 +183,10 @@ impl FitPlan {
     /// Landscape size; both at least 1.
     pub fn with_grid(mut self, n_rho: usize, n_eta: usize) -> Result<Self, IdentifyError> {
         if n_rho == 0 || n_eta == 0 {
-            return Err(IdentifyError::Landscape(LandscapeError::EmptyGrid { n_rho, n_eta }));
+            return Err(IdentifyError::Landscape(LandscapeError::EmptyGrid {
+                n_rho,
+                n_eta,
+            }));
         }
         self.grid = (n_rho, n_eta);
         Ok(self)
@@ -406,8 +411,20 @@ pub fn identify(
         _ => None,
     };
     let integer = plan.exponents == ExponentChoice::Integer;
-    let rho_axis = exponent_axis(spec0.status[RHO], spec0.bounds[RHO], plan.grid.0, integer, stiff);
-    let eta_axis = exponent_axis(spec0.status[ETA], spec0.bounds[ETA], plan.grid.1, integer, damp);
+    let rho_axis = exponent_axis(
+        spec0.status[RHO],
+        spec0.bounds[RHO],
+        plan.grid.0,
+        integer,
+        stiff,
+    );
+    let eta_axis = exponent_axis(
+        spec0.status[ETA],
+        spec0.bounds[ETA],
+        plan.grid.1,
+        integer,
+        damp,
+    );
     let terms_free = Terms {
         stiffness: stiff,
         damping: damp,
@@ -449,12 +466,24 @@ pub fn identify(
             };
             let conv = phase_conv;
             let fixed = match phase_mode {
-                LandscapePhase::Ignore => solve_magnitude(&prep, fixed_terms, rho, eta, None).map(|x| x.0),
-                _ => solve_phase(&prep, fixed_terms, rho, eta, conv, conv.map_or(0.0, |c| c.delay)),
+                LandscapePhase::Ignore => {
+                    solve_magnitude(&prep, fixed_terms, rho, eta, None).map(|x| x.0)
+                }
+                _ => solve_phase(
+                    &prep,
+                    fixed_terms,
+                    rho,
+                    eta,
+                    conv,
+                    conv.map_or(0.0, |c| c.delay),
+                ),
             };
             let free_gain = best_ee.theta[GAIN];
             let (lo, hi) = spec0.bounds[GAIN];
-            let dof = best_ee.n_residuals.saturating_sub(best_ee.n_unknowns).max(1) as f64;
+            let dof = best_ee
+                .n_residuals
+                .saturating_sub(best_ee.n_unknowns)
+                .max(1) as f64;
             let f = match (&fixed, land.fit_at(bi, bj)) {
                 (Ok(fx), Some(fr)) if fr.n_unknowns > fx.n_unknowns => {
                     (fx.cost - fr.cost) / (fr.cost / dof).max(f64::MIN_POSITIVE)
@@ -510,7 +539,9 @@ pub fn identify(
     let mut best: Option<(FitResult, FitSpec, f64)> = None;
     let mut last_err = String::new();
     for &(i, j) in land.minima.iter().take(plan.refine.max(1)) {
-        let Some(ee) = land.fit_at(i, j) else { continue };
+        let Some(ee) = land.fit_at(i, j) else {
+            continue;
+        };
         let sign = match plan.sign {
             SignChoice::Hardening => Sign::Hardening,
             SignChoice::Softening => Sign::Softening,

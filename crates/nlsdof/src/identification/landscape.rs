@@ -95,7 +95,9 @@ pub struct ProfileInterval {
 pub enum LandscapeError {
     #[error("landscape grid of zero size ({n_rho} x {n_eta})")]
     EmptyGrid { n_rho: usize, n_eta: usize },
-    #[error("landscape axis {name} = [{min}, {max}] is invalid (need finite values > -3, min <= max)")]
+    #[error(
+        "landscape axis {name} = [{min}, {max}] is invalid (need finite values > -3, min <= max)"
+    )]
     BadAxis {
         name: &'static str,
         min: f64,
@@ -272,7 +274,13 @@ impl Landscape {
         let prof: Vec<f64> = (0..axis.len())
             .map(|k| {
                 (0..n_other)
-                    .map(|o| if which == 0 { self.at(k, o) } else { self.at(o, k) })
+                    .map(|o| {
+                        if which == 0 {
+                            self.at(k, o)
+                        } else {
+                            self.at(o, k)
+                        }
+                    })
                     .filter(|c| c.is_finite())
                     .fold(f64::INFINITY, f64::min)
             })

@@ -27,7 +27,10 @@ pub mod uncertainty;
 
 pub use data::{Curve, DataError, Dataset, Record};
 pub use equation_error::{EquationErrorFit, PhaseConvention};
-pub use identify::{identify, FitPlan, GainChoice, Identification, IdentifyError, JumpChoice, PhaseChoice, SignChoice};
+pub use identify::{
+    identify, FitPlan, GainChoice, Identification, IdentifyError, JumpChoice, PhaseChoice,
+    SignChoice,
+};
 pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};
 pub use models::{ModelKind, N_PARAMS, PARAM_NAMES};
@@ -101,7 +104,8 @@ pub struct FitResult {
     pub status: [Status; N_PARAMS],
     /// Best θ = (α, δ, β, ρ, κ, η, gain).
     pub theta: [f64; N_PARAMS],
-    /// Eq 31 cost Σ w ((a_model − a_meas)/γ)².
+    /// Eq 31 cost Σ w ((a_model − a_meas)/γ)² (amplitudes only; the phase
+    /// residuals' part of the objective is `phase_cost`).
     pub cost: f64,
     pub n_points: usize,
     pub n_free: usize,
@@ -122,7 +126,8 @@ pub struct FitResult {
     /// Free parameters along a (numerically) null direction of the
     /// Jacobian at the optimum: the data cannot separate them.
     pub unidentifiable: Vec<&'static str>,
-    /// Part of `cost` from phase residuals (`None` when phase was not fitted).
+    /// Sum of the squared phase residuals at the optimum (`None` when phase
+    /// was not fitted); the objective minimised was `cost + phase_cost`.
     pub phase_cost: Option<f64>,
 }
 
@@ -347,12 +352,13 @@ pub(crate) fn assess(
         });
         off += n;
     }
+    let amplitude_cost: f64 = e.residuals[..n_amp].iter().map(|r| r * r).sum();
     Ok(FitResult {
         kind: spec.kind,
         status: spec.status,
         theta,
-        cost: e.cost(),
-        n_points: e.residuals.len(),
+        cost: amplitude_cost,
+        n_points: n_amp,
         n_free: free.len(),
         termination,
         iterations,

@@ -540,12 +540,7 @@ impl DerivativeConstants {
 
     /// `dφ/dθ` of the phase lag `φ = atan2(ΩD, S)` at the root `a`, given
     /// `da/dθ` ([`Self::derivatives`]); see [`evaluate_with_phase`].
-    pub fn phase_derivatives(
-        &self,
-        omega: f64,
-        a: f64,
-        da: &[f64; N_PARAMS],
-    ) -> [f64; N_PARAMS] {
+    pub fn phase_derivatives(&self, omega: f64, a: f64, da: &[f64; N_PARAMS]) -> [f64; N_PARAMS] {
         let theta = &self.theta;
         let (alpha, delta, beta, rho, kappa, eta) = (
             theta[ALPHA],

@@ -538,7 +538,7 @@ pub fn identify(
     let mut candidates = Vec::new();
     let mut best: Option<(FitResult, FitSpec, f64)> = None;
     let mut last_err = String::new();
-    for &(i, j) in land.minima.iter().take(plan.refine.max(1)) {
+    for (i, j) in candidate_nodes(&land, plan.refine.max(1)) {
         let Some(ee) = land.fit_at(i, j) else {
             continue;
         };
@@ -620,6 +620,44 @@ pub fn identify(
         jump_weight,
         candidates,
     })
+}
+
+/// The landscape nodes refined by output error: the best `refine` grid
+/// minima, then (diversity) the best node of each third of every free
+/// exponent's range that is not yet a candidate. Where the landscape is
+/// flat along an exponent (the data barely constrain it, as the damping
+/// exponent of the clamped beam) its grid minima all lie in one place, and
+/// the output error can then run into a degenerate corner (e.g. Coulomb
+/// friction that holds the mass); starts spread over the range let it
+/// compare.
+fn candidate_nodes(land: &Landscape, refine: usize) -> Vec<(usize, usize)> {
+    let mut out: Vec<(usize, usize)> = land.minima.iter().take(refine).copied().collect();
+    let (nr, ne) = (land.rho.len(), land.eta.len());
+    for axis in 0..2 {
+        let n = if axis == 0 { nr } else { ne };
+        if n < 3 {
+            continue;
+        }
+        for band in 0..3 {
+            let (lo, hi) = (band * n / 3, ((band + 1) * n / 3).max(band * n / 3 + 1));
+            let mut best: Option<((usize, usize), f64)> = None;
+            for k in lo..hi {
+                for o in 0..if axis == 0 { ne } else { nr } {
+                    let (i, j) = if axis == 0 { (k, o) } else { (o, k) };
+                    let c = land.at(i, j);
+                    if c.is_finite() && best.map_or(true, |(_, b)| c < b) {
+                        best = Some(((i, j), c));
+                    }
+                }
+            }
+            if let Some((node, _)) = best {
+                if !out.contains(&node) {
+                    out.push(node);
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Sets the output-error start from an equation-error fit (clamped into the

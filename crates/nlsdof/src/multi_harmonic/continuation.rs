@@ -156,6 +156,9 @@ struct Cont<'a> {
     ps: f64,
     n: usize,
     iterations: usize,
+    /// `[J̃ | R̃_p]` at the point returned by the last corrector, reused
+    /// for the tangent there.
+    last_m: Option<DMatrix<f64>>,
 }
 
 impl Cont<'_> {
@@ -207,10 +210,22 @@ impl Cont<'_> {
     }
 
     fn tangent(&mut self, y: &[f64], t_prev: &[f64]) -> Option<Vec<f64>> {
-        let n = self.n;
         let (_, m) = self.eval(y);
+        self.tangent_of(&m, t_prev)
+    }
+
+    /// Tangent at the point just returned by [`Cont::correct`].
+    fn tangent_after_correct(&mut self, y: &[f64], t_prev: &[f64]) -> Option<Vec<f64>> {
+        match self.last_m.take() {
+            Some(m) => self.tangent_of(&m, t_prev),
+            None => self.tangent(y, t_prev),
+        }
+    }
+
+    fn tangent_of(&self, m: &DMatrix<f64>, t_prev: &[f64]) -> Option<Vec<f64>> {
+        let n = self.n;
         let mut a = DMatrix::zeros(n + 1, n + 1);
-        a.view_mut((0, 0), (n, n + 1)).copy_from(&m);
+        a.view_mut((0, 0), (n, n + 1)).copy_from(m);
         for j in 0..=n {
             a[(n, j)] = t_prev[j];
         }
@@ -231,11 +246,13 @@ impl Cont<'_> {
 
     /// Newton on `R = 0, c·(y − y_c) = 0` from `y` (in place), where the
     /// constraint row is `c` (for a fixed parameter: the unit vector of p).
+    /// Converged when `‖R‖∞ ≤ tol · scale` and `|c·(y − y_c)| ≤ 1e-12`; the
+    /// bordered Jacobian at the returned point is kept for the tangent.
     fn correct(&mut self, y: &mut [f64], c: &[f64], yc: &[f64], max_it: usize) -> Option<usize> {
         let n = self.n;
         let tol = self.sys.settings.tol;
-        let mut converged_once = false;
-        for it in 0..max_it {
+        self.last_m = None;
+        for it in 0..=max_it {
             let (r, m) = self.eval(y);
             let rn = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             let g: f64 = c
@@ -248,10 +265,11 @@ impl Cont<'_> {
             }
             self.iterations += 1;
             if rn <= tol * self.scale(y) && g.abs() <= 1e-12 {
-                if converged_once {
-                    return Some(it);
-                }
-                converged_once = true;
+                self.last_m = Some(m);
+                return Some(it);
+            }
+            if it == max_it {
+                break;
             }
             let mut a = DMatrix::zeros(n + 1, n + 1);
             a.view_mut((0, 0), (n, n + 1)).copy_from(&m);
@@ -266,9 +284,6 @@ impl Cont<'_> {
             let d = a.lu().solve(&b)?;
             for i in 0..=n {
                 y[i] -= d[i];
-            }
-            if converged_once {
-                return Some(it + 1);
             }
         }
         None
@@ -419,6 +434,7 @@ fn run(
         ps,
         n,
         iterations: 0,
+        last_m: None,
     };
     let dir = (p_end - p_start).signum();
     let p_lo = p_start.min(p_end);
@@ -481,7 +497,7 @@ fn run(
         let mut tn = Vec::new();
         if let Some(k) = res {
             its = k;
-            if let Some(tt) = c.tangent(&yn, &t) {
+            if let Some(tt) = c.tangent_after_correct(&yn, &t) {
                 let dot: f64 = tt.iter().zip(&t).map(|(a, b)| a * b).sum();
                 if dot.clamp(-1.0, 1.0).acos() <= opts.max_angle {
                     ok = true;
@@ -518,7 +534,7 @@ fn run(
                     ds = 0.5 * step;
                     continue;
                 }
-                tn = match c.tangent(&yn, &t) {
+                tn = match c.tangent_after_correct(&yn, &t) {
                     Some(v) => v,
                     None => {
                         ds = 0.5 * step;
@@ -597,7 +613,7 @@ fn locate_fold(c: &mut Cont<'_>, y0: &[f64], t0: &[f64], s1: f64) -> Option<(Vec
         let yp: Vec<f64> = y0.iter().zip(t0).map(|(a, b)| a + s * b).collect();
         let mut y = yp.clone();
         c.correct(&mut y, t0, &yp, 12)?;
-        let t = c.tangent(&y, t0)?;
+        let t = c.tangent_after_correct(&y, t0)?;
         Some((t[n], y))
     };
     let (mut a, mut fa) = (0.0, t0[n]);

@@ -857,3 +857,54 @@ fn backbone_experiment() {
         eprintln!("  {:?}", t.elapsed());
     }
 }
+
+// ------------------------------------------------------------ sweep
+
+/// With H = 1 the sweep read off the continued branch equals today's exact
+/// first-order stepped-sine sweep: same amplitudes, same jumps.
+#[test]
+fn sweep_h1_equals_first_order_sweep() {
+    use nlsdof::multi_harmonic::sweep::sweep;
+    let d = duffing_strong();
+    let omegas: Vec<f64> = (0..200)
+        .map(|i| TAU * (8.0 + 8.0 * i as f64 / 199.0))
+        .collect();
+    let fr = ForcedResponse::from_normalised(&d, 2.0, Formulation::HarmonicBalance).unwrap();
+    for dir in [SweepDirection::Up, SweepDirection::Down] {
+        let exact = fr.sweep(&omegas, dir).unwrap();
+        let mhb = sweep(
+            &d,
+            2.0,
+            1,
+            &omegas,
+            dir,
+            Settings::default(),
+            &ContinuationOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(exact.points.len(), mhb.points.len());
+        for (e, m) in exact.points.iter().zip(&mhb.points) {
+            assert!((e.omega - m.omega).abs() < 1e-12 * e.omega);
+            let a = harmonic_amplitude(&m.coefficients, 1);
+            assert!(
+                (e.amplitude - a).abs() < 1e-9 * e.amplitude,
+                "{dir:?} {} {} {a}",
+                e.omega,
+                e.amplitude
+            );
+            assert_eq!(e.stable, m.stable);
+        }
+        assert_eq!(exact.jumps.len(), 1);
+        assert_eq!(mhb.jumps.len(), 1);
+        let (je, jm) = (exact.jumps[0], mhb.jumps[0]);
+        assert!(
+            (je.omega - jm.omega).abs() < 1e-9 * je.omega,
+            "{je:?} {jm:?}"
+        );
+        assert!((je.amplitude_before - jm.amplitude_before).abs() < 1e-6 * je.amplitude_before);
+        assert!(
+            (je.amplitude_after - jm.amplitude_after).abs() < 1e-6 * je.amplitude_after,
+            "{je:?} {jm:?}"
+        );
+    }
+}

@@ -17,6 +17,7 @@
 //! * [`continuation`] — pseudo-arclength continuation in Ω (or in γ) with
 //!   step control and limit-point (fold) location;
 //! * [`stability`] — Hill's method: Floquet exponents from the HB Jacobian;
+//! * [`sweep`] — a stepped-sine sweep (jumps at folds) read off a branch;
 //! * [`backbone`] — periodic orbits of the conservative system (nonlinear
 //!   normal mode) as amplitude against frequency.
 //!
@@ -28,6 +29,7 @@ pub mod aft;
 pub mod backbone;
 pub mod continuation;
 pub mod stability;
+pub mod sweep;
 pub mod system;
 
 pub use continuation::{

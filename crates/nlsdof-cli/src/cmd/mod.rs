@@ -5,6 +5,7 @@ pub mod equiv;
 pub mod fit;
 pub mod frf;
 pub mod frf_estimate;
+pub mod frf_mhb;
 pub mod linear_id;
 pub mod phase_resonance;
 pub mod roots;

@@ -908,3 +908,55 @@ fn sweep_h1_equals_first_order_sweep() {
         );
     }
 }
+
+// ------------------------------------------------------ peak and truncation study
+
+/// The located first-order peak satisfies the analytic peak condition of the
+/// first-order balance: ∂P/∂Ω = 0 with P = a²[(α + g(2)βa² − Ω²)² + (δΩ)²]
+/// ⇒ α + ¾βa² − Ω² = δ²/2 (no nonlinear damping).
+#[test]
+fn located_peak_satisfies_first_order_peak_condition_and_study_converges() {
+    use nlsdof::multi_harmonic::truncation::truncation_study;
+    let d = duffing_strong();
+    let (w0, w1) = (TAU * 8.0, TAU * 16.0);
+    let br = continue_in_omega(
+        &d,
+        2.0,
+        1,
+        w0,
+        w1,
+        Settings::default(),
+        &ContinuationOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(br.peaks.len(), 1);
+    let p = &br.peaks[0];
+    let a = p.amplitude(1);
+    let lhs = d.alpha + 0.75 * d.beta * a * a - p.omega * p.omega;
+    let rhs = d.delta * d.delta / 2.0;
+    eprintln!("peak condition: {lhs:e} vs {rhs:e} (alpha = {})", d.alpha);
+    assert!((lhs - rhs).abs() < 1e-9 * d.alpha, "{lhs} {rhs}");
+    // truncation study: converges, and first order is off by more than 1e-3
+    let st = truncation_study(
+        &d,
+        2.0,
+        w0,
+        w1,
+        &[1, 3, 5, 7, 9, 11, 15, 21],
+        1e-6,
+        Settings::default(),
+        &ContinuationOptions::default(),
+    )
+    .unwrap();
+    assert!(
+        st.converged,
+        "{:?}",
+        st.rows.iter().map(|r| r.change).collect::<Vec<_>>()
+    );
+    let r = &st.rows[st.reference];
+    let fo = &st.rows[0];
+    let e_peak = (fo.peak.unwrap().1 - r.peak.unwrap().1).abs() / r.peak.unwrap().1;
+    let e_fold = (fo.folds[1].0 - r.folds[1].0).abs() / r.folds[1].0;
+    eprintln!("strong Duffing gamma=2: converged at H={}, first-order peak error {e_peak:.2e}, upper fold {e_fold:.2e}", r.harmonics);
+    assert!(e_peak > 1e-3 && e_fold > 1e-3);
+}

@@ -31,7 +31,8 @@
 //! changes sign between two accepted points. It is located by the secant
 //! (Illinois) method on `s ↦ t_p(y(s))`, `y(s)` the corrected point at
 //! arclength `s` from the earlier point, to `|t_p| ≤ 1e-10` or 60
-//! iterations.
+//! iterations. The maxima of the first-harmonic amplitude along the branch
+//! (the resonance peaks) are located the same way on `d(a₁² + b₁²)/ds`.
 
 use super::aft::n_coefficients;
 use super::stability::{hill_floquet_exponents, FloquetExponents};
@@ -138,6 +139,10 @@ pub struct Branch {
     pub points: Vec<BranchPoint>,
     /// Folds in branch order (their points are also in `points`).
     pub limit_points: Vec<LimitPoint>,
+    /// Local maxima of the first-harmonic amplitude along the branch,
+    /// located like the folds (secant on `d(a₁²+b₁²)/ds = 0`), in branch
+    /// order (not inserted in `points`).
+    pub peaks: Vec<BranchPoint>,
     /// Samples per period at the end.
     pub samples: usize,
     /// Set when the branch stopped early: the reason (the branch up to
@@ -478,6 +483,7 @@ fn run(
     })?;
     let mut points = vec![c.point(&y, opts.stability)?];
     let mut limit_points = Vec::new();
+    let mut peaks = Vec::new();
     let mut ds = opts.ds0.min(opts.ds_max);
     let mut rejections = 0usize;
     let mut warning = None;
@@ -573,6 +579,14 @@ fn run(
                 points.push(pt);
             }
         }
+        // first-harmonic amplitude maximum between y and yn?
+        let (g0, g1) = (amplitude_slope(&y, &t), amplitude_slope(&yn, &tn));
+        if g0 > 0.0 && g1 <= 0.0 {
+            let tol = 1e-13 * (y[1].abs() + y[2].abs());
+            if let Some((yp, _)) = locate_zero(&mut c, &y, &t, step, tol, amplitude_slope) {
+                peaks.push(c.point(&yp, false)?);
+            }
+        }
         points.push(c.point(&yn, opts.stability)?);
         y = yn;
         t = tn;
@@ -600,6 +614,7 @@ fn run(
         harmonics: h,
         points,
         limit_points,
+        peaks,
         samples: c.sys.samples(),
         warning,
         newton_iterations: c.iterations,
@@ -609,14 +624,34 @@ fn run(
 /// Secant (Illinois) on `s ↦ t_p(y(s))` in `(0, s1)`.
 fn locate_fold(c: &mut Cont<'_>, y0: &[f64], t0: &[f64], s1: f64) -> Option<(Vec<f64>, usize)> {
     let n = c.n;
+    locate_zero(c, y0, t0, s1, 1e-10, move |_, t| t[n])
+}
+
+/// `½ d(a₁² + b₁²)/ds` in scaled coordinates (zero at a first-harmonic
+/// amplitude extremum along the branch).
+fn amplitude_slope(y: &[f64], t: &[f64]) -> f64 {
+    y[1] * t[1] + y[2] * t[2]
+}
+
+/// Secant (Illinois) on `s ↦ g(y(s), t(s))` in `(0, s1)`, `y(s)` the
+/// corrected point at arclength `s` from `y0` along `t0`; stops at
+/// `|g| ≤ tol` or a bracket below 1e-14·s1 (60 iterations at most).
+fn locate_zero(
+    c: &mut Cont<'_>,
+    y0: &[f64],
+    t0: &[f64],
+    s1: f64,
+    tol: f64,
+    g: impl Fn(&[f64], &[f64]) -> f64,
+) -> Option<(Vec<f64>, usize)> {
     let eval = |c: &mut Cont<'_>, s: f64| -> Option<(f64, Vec<f64>)> {
         let yp: Vec<f64> = y0.iter().zip(t0).map(|(a, b)| a + s * b).collect();
         let mut y = yp.clone();
         c.correct(&mut y, t0, &yp, 12)?;
         let t = c.tangent_after_correct(&y, t0)?;
-        Some((t[n], y))
+        Some((g(&y, &t), y))
     };
-    let (mut a, mut fa) = (0.0, t0[n]);
+    let (mut a, mut fa) = (0.0, g(y0, t0));
     let (mut b, (mut fb, mut yb)) = (s1, eval(c, s1)?);
     if fa * fb > 0.0 {
         return None;
@@ -624,7 +659,7 @@ fn locate_fold(c: &mut Cont<'_>, y0: &[f64], t0: &[f64], s1: f64) -> Option<(Vec
     for it in 0..60 {
         let s = (a * fb - b * fa) / (fb - fa);
         let (fs, ys) = eval(c, s)?;
-        if fs.abs() <= 1e-10 || (b - a).abs() <= 1e-14 * s1.max(1e-300) {
+        if fs.abs() <= tol || (b - a).abs() <= 1e-14 * s1.max(1e-300) {
             return Some((ys, it));
         }
         if fs * fb < 0.0 {

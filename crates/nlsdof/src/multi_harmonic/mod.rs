@@ -18,6 +18,8 @@
 //!   step control and limit-point (fold) location;
 //! * [`stability`] — Hill's method: Floquet exponents from the HB Jacobian;
 //! * [`sweep`] — a stepped-sine sweep (jumps at folds) read off a branch;
+//! * [`truncation`] — error of the truncation (first order included) in
+//!   the peak and the folds against H, until convergence;
 //! * [`backbone`] — periodic orbits of the conservative system (nonlinear
 //!   normal mode) as amplitude against frequency.
 //!
@@ -31,6 +33,7 @@ pub mod continuation;
 pub mod stability;
 pub mod sweep;
 pub mod system;
+pub mod truncation;
 
 pub use continuation::{
     continue_in_gamma, continue_in_omega, Branch, BranchPoint, ContinuationOptions, LimitPoint,

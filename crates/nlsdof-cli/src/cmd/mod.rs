@@ -6,6 +6,7 @@ pub mod fit;
 pub mod frf;
 pub mod frf_estimate;
 pub mod frf_mhb;
+pub mod hb_error;
 pub mod linear_id;
 pub mod phase_resonance;
 pub mod roots;

@@ -25,6 +25,23 @@ pub const CLI_MAX_HARMONICS: usize = if MAX_HARMONICS < 64 {
     64
 };
 
+/// Refuses a model without any damping: its forced response has no steady
+/// state at resonance (the amplitude is unbounded) and every periodic
+/// solution is only neutrally stable, so neither continuation nor Hill's
+/// method has a defined answer.
+pub fn check_damped(model: &Model, flag: &str) -> Result<(), CliError> {
+    let c_e = model
+        .nonlinear_damping
+        .map(|d| d.coefficient)
+        .unwrap_or(0.0);
+    if model.damping == 0.0 && c_e == 0.0 {
+        return Err(CliError::Usage(format!(
+            "{flag}: the model has no damping (c = 0 and no c_e term): at resonance there is no forced steady state and every periodic solution is only neutrally stable; give c > 0 or a damping term"
+        )));
+    }
+    Ok(())
+}
+
 /// Checks `--harmonics`.
 pub fn check_harmonics(h: usize) -> Result<usize, CliError> {
     if h == 0 || h > CLI_MAX_HARMONICS {
@@ -103,6 +120,7 @@ pub fn run(
     f_max: f64,
 ) -> Result<(), CliError> {
     let h = args.harmonics;
+    check_damped(model, "--harmonics")?;
     let levels = compute(model, gammas, omegas, args.sweep.to_core(), h)?;
     for (i, l) in levels.iter().enumerate() {
         if let Some(w) = &l.sweep.warning {

@@ -98,6 +98,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     let model = load_model(&args.model)?;
+    super::frf_mhb::check_damped(&model, "hb-error")?;
     let fn_hz = hz(model.omega_n());
     let f_min = check_frequency("--f-min", args.f_min.unwrap_or(0.8 * fn_hz))?;
     let f_max = check_frequency("--f-max", args.f_max.unwrap_or(2.0 * fn_hz))?;

@@ -960,3 +960,80 @@ fn located_peak_satisfies_first_order_peak_condition_and_study_converges() {
     eprintln!("strong Duffing gamma=2: converged at H={}, first-order peak error {e_peak:.2e}, upper fold {e_fold:.2e}", r.harmonics);
     assert!(e_peak > 1e-3 && e_fold > 1e-3);
 }
+
+// ------------------------------------------------ folds vs the stepped-sine rig
+
+/// The upper (jump-down) fold of a strong Duffing oscillator against the
+/// virtual stepped-sine rig (RK4 time integration, settling rule): with
+/// steps finer than the first-order truncation error of the fold, the
+/// rig's jump brackets the H = 9 fold within one step and excludes the
+/// first-order (H = 1) fold.
+#[test]
+fn upper_fold_matches_stepped_sine_rig_and_first_order_does_not() {
+    use nlsdof::stepped_sine::{run, RigOptions};
+    let model = Model::linear(1.0, 1.0, 0.02)
+        .unwrap()
+        .with_stiffness(0.5, 2.0)
+        .unwrap();
+    let m = model.normalised().unwrap();
+    let gamma = 0.02;
+    let fold_of = |h: usize| {
+        let br = continue_in_omega(
+            &m,
+            gamma,
+            h,
+            0.9,
+            1.3,
+            Settings::default(),
+            &ContinuationOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(br.limit_points.len(), 2);
+        br.limit_points
+            .iter()
+            .map(|l| l.point.omega)
+            .fold(0.0f64, f64::max)
+    };
+    let (f1, f9) = (fold_of(1), fold_of(9));
+    let gap = f9 - f1;
+    assert!(gap > 0.0);
+    // window: start 4 gaps below the H = 9 fold on the resonant branch
+    let step = gap / 6.0;
+    let omegas: Vec<f64> = (0..40).map(|i| f9 - 4.0 * gap + i as f64 * step).collect();
+    let w0 = omegas[0];
+    let mut sys = HbSystem::new(&m, gamma, 9, Settings::default()).unwrap();
+    let sol = solve_at(&mut sys, w0, StartRoot::Largest).unwrap();
+    let q = sol.coefficients;
+    let start = State {
+        x: displacement_at(&q, w0, 0.0),
+        v: velocity_at(&q, w0, 0.0),
+    };
+    let sw = run(
+        &m,
+        gamma,
+        &omegas,
+        SweepDirection::Up,
+        &RigOptions::default(),
+        start,
+    )
+    .unwrap();
+    let pts = &sw.points;
+    let (k, ratio) = (0..pts.len() - 1)
+        .map(|k| (k, (pts[k].amplitude / pts[k + 1].amplitude).ln()))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    let (lo, hi) = (pts[k].omega, pts[k + 1].omega);
+    eprintln!(
+        "rig jump between {lo:.6} and {hi:.6} rad/s (x{:.2}), fold H=9 {f9:.6}, H=1 {f1:.6}, step {step:.2e}",
+        ratio.exp()
+    );
+    assert!(ratio > 1.5f64.ln());
+    assert!(
+        lo - step <= f9 && f9 <= hi + step,
+        "H=9 fold {f9} outside [{lo}, {hi}] ± {step}"
+    );
+    assert!(
+        f1 < lo - step,
+        "first-order fold {f1} not excluded by the rig jump [{lo}, {hi}]"
+    );
+}

@@ -6,7 +6,7 @@
 use super::roots::{check_frequency, check_gamma, load_model, model_summary};
 use crate::error::CliError;
 use nlsdof::multi_harmonic::truncation::{truncation_study, TruncationStudy};
-use nlsdof::multi_harmonic::{ContinuationOptions, Settings};
+use nlsdof::multi_harmonic::ContinuationOptions;
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -122,7 +122,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             2.0 * PI * f_max,
             &ladder,
             args.tol,
-            Settings::default(),
+            super::frf_mhb::settings_for(&model),
             &ContinuationOptions::default(),
         )?;
         if !st.converged {

@@ -113,3 +113,48 @@ fn hb_error_converges_and_first_order_error_is_reported() {
     assert_eq!(last["peak_amplitude_error"].as_f64().unwrap(), 0.0);
     assert_eq!(last["harmonics"], lv["reference_harmonics"]);
 }
+
+#[test]
+fn coulomb_harmonics_reports_the_regularisation_check() {
+    let m = example("coulomb.toml").display().to_string();
+    let v = json(&[
+        "frf",
+        "--model",
+        &m,
+        "--gamma",
+        "10",
+        "--f-min",
+        "3",
+        "--f-max",
+        "4",
+        "--steps",
+        "5",
+        "--harmonics",
+        "5",
+        "--json",
+    ]);
+    let lv = &v["levels"][0];
+    let chk = lv["regularisation_check"]["relative_change_eps_over_4"]
+        .as_f64()
+        .unwrap();
+    assert!(chk < 1e-4, "{chk}");
+    assert_eq!(lv["points"].as_array().unwrap().len(), 5);
+    // smooth models have no regularisation
+    let d = json(&[
+        "frf",
+        "--model",
+        &duffing(),
+        "--gamma",
+        "1",
+        "--f-min",
+        "8",
+        "--f-max",
+        "9",
+        "--steps",
+        "3",
+        "--harmonics",
+        "3",
+        "--json",
+    ]);
+    assert!(d["levels"][0]["regularisation_check"].is_null());
+}

@@ -8,8 +8,8 @@ use super::frf::Args;
 use crate::error::CliError;
 use nlsdof::multi_harmonic::sweep::{sweep, MhbSweep};
 use nlsdof::multi_harmonic::{
-    harmonic_amplitude, harmonic_phase, max_abs_displacement, ContinuationOptions, Settings,
-    MAX_HARMONICS,
+    harmonic_amplitude, harmonic_phase, max_abs_displacement, regularisation_check,
+    ContinuationOptions, HbSystem, Settings, MAX_HARMONICS,
 };
 use nlsdof::{Model, SweepDirection};
 use plotters::element::DashedPathElement;
@@ -60,6 +60,9 @@ fn hz(omega: f64) -> f64 {
 pub struct MhbLevel {
     pub gamma: f64,
     pub sweep: MhbSweep,
+    /// Regularised models only: the regularisation check (ε → ε/4) at the
+    /// swept point of largest first-harmonic amplitude: (f Hz, relative change).
+    pub regularisation: Option<(f64, f64)>,
 }
 
 /// Computes the levels (in memory, nothing written).
@@ -82,7 +85,23 @@ pub fn compute(
             settings_for(model),
             &ContinuationOptions::default(),
         )?;
-        out.push(MhbLevel { gamma, sweep: s });
+        let mut regularisation = None;
+        let mut sys = HbSystem::new(&n, gamma, h, settings_for(model))?;
+        if sys.is_regularised() {
+            if let Some(p) = s.points.iter().max_by(|a, b| {
+                harmonic_amplitude(&a.coefficients, 1)
+                    .total_cmp(&harmonic_amplitude(&b.coefficients, 1))
+            }) {
+                sys.set_samples(s.samples)?;
+                let chk = regularisation_check(&sys, p.omega, &p.coefficients)?;
+                regularisation = Some((hz(p.omega), chk.relative_change));
+            }
+        }
+        out.push(MhbLevel {
+            gamma,
+            sweep: s,
+            regularisation,
+        });
     }
     Ok(out)
 }
@@ -220,6 +239,7 @@ fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
                 "folds_hz": l.sweep.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
                 "fold_amplitudes": l.sweep.folds.iter().map(|f| f.1).collect::<Vec<_>>(),
                 "samples_per_period": l.sweep.samples,
+                "regularisation_check": l.regularisation.map(|(f, c)| json!({"f_hz": f, "relative_change_eps_over_4": c})),
                 "warning": l.sweep.warning.as_ref().map(|w| w.to_string()),
             })
         })
@@ -365,6 +385,12 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
                 "  fold               at {:.6} Hz, amplitude {:.6e} m",
                 hz(f.0),
                 f.1
+            );
+        }
+        if let Some((f, c)) = l.regularisation {
+            let _ = writeln!(
+                s,
+                "  regularisation     friction/negative exponent smoothed; at the peak ({f:.6} Hz) eps -> eps/4 changes A_1 by {c:.2e} (relative)"
             );
         }
         if let Some(w) = &l.sweep.warning {

@@ -164,6 +164,10 @@ struct Cont<'a> {
     /// `[J̃ | R̃_p]` at the point returned by the last corrector, reused
     /// for the tangent there.
     last_m: Option<DMatrix<f64>>,
+    q_buf: Vec<f64>,
+    r_buf: Vec<f64>,
+    jac_buf: Vec<f64>,
+    dro_buf: Vec<f64>,
 }
 
 impl Cont<'_> {
@@ -172,27 +176,35 @@ impl Cont<'_> {
         (q, y[self.n] * self.ps)
     }
 
-    /// Residual and bordered Jacobian rows `[J̃ | R̃_p]` (n × (n+1)).
-    fn eval(&mut self, y: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+    /// Evaluates at `y`: the residual goes to `self.r`; returns
+    /// `(‖R‖∞, residual scale, A)` with `A` the `(n+1)×(n+1)` matrix whose
+    /// first `n` rows are `[J̃ | R̃_p]` and whose last row is zero (for the
+    /// caller's bordering row). Buffers are reused (no allocation but `A`).
+    fn eval(&mut self, y: &[f64]) -> (f64, f64, DMatrix<f64>) {
         let n = self.n;
-        let (q, p) = self.pq(y);
+        for (qv, yv) in self.q_buf.iter_mut().zip(&y[..n]) {
+            *qv = yv * self.qs;
+        }
+        let p = y[n] * self.ps;
         let (omega, gamma) = match self.param {
             Parameter::Omega => (p, self.sys.gamma()),
             Parameter::Gamma => (self.fixed, p),
         };
         self.sys.set_gamma(gamma);
-        let mut r = vec![0.0; n];
-        let mut jac = vec![0.0; n * n];
-        let mut dro = vec![0.0; n];
-        self.sys
-            .residual_jacobian(&q, omega, &mut r, &mut jac, &mut dro);
-        let mut m = DMatrix::zeros(n, n + 1);
+        self.sys.residual_jacobian(
+            &self.q_buf,
+            omega,
+            &mut self.r_buf,
+            &mut self.jac_buf,
+            &mut self.dro_buf,
+        );
+        let mut m = DMatrix::zeros(n + 1, n + 1);
         for i in 0..n {
             for j in 0..n {
-                m[(i, j)] = jac[i * n + j] * self.qs;
+                m[(i, j)] = self.jac_buf[i * n + j] * self.qs;
             }
             m[(i, n)] = match self.param {
-                Parameter::Omega => dro[i] * self.ps,
+                Parameter::Omega => self.dro_buf[i] * self.ps,
                 Parameter::Gamma => {
                     if i == 1 {
                         -self.ps
@@ -202,35 +214,27 @@ impl Cont<'_> {
                 }
             };
         }
-        (r, m)
-    }
-
-    fn scale(&self, y: &[f64]) -> f64 {
-        let (q, p) = self.pq(y);
-        let omega = match self.param {
-            Parameter::Omega => p,
-            Parameter::Gamma => self.fixed,
-        };
-        self.sys.residual_scale(&q, omega)
+        let rn = self.r_buf.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let scale = self.sys.residual_scale(&self.q_buf, omega);
+        (rn, scale, m)
     }
 
     fn tangent(&mut self, y: &[f64], t_prev: &[f64]) -> Option<Vec<f64>> {
-        let (_, m) = self.eval(y);
-        self.tangent_of(&m, t_prev)
+        let (_, _, m) = self.eval(y);
+        self.tangent_of(m, t_prev)
     }
 
     /// Tangent at the point just returned by [`Cont::correct`].
     fn tangent_after_correct(&mut self, y: &[f64], t_prev: &[f64]) -> Option<Vec<f64>> {
         match self.last_m.take() {
-            Some(m) => self.tangent_of(&m, t_prev),
+            Some(m) => self.tangent_of(m, t_prev),
             None => self.tangent(y, t_prev),
         }
     }
 
-    fn tangent_of(&self, m: &DMatrix<f64>, t_prev: &[f64]) -> Option<Vec<f64>> {
+    /// Solves `[J̃ R̃_p; t_prevᵀ] t = e_{n+1}` (`a` holds the first n rows).
+    fn tangent_of(&self, mut a: DMatrix<f64>, t_prev: &[f64]) -> Option<Vec<f64>> {
         let n = self.n;
-        let mut a = DMatrix::zeros(n + 1, n + 1);
-        a.view_mut((0, 0), (n, n + 1)).copy_from(m);
         for j in 0..=n {
             a[(n, j)] = t_prev[j];
         }
@@ -258,8 +262,7 @@ impl Cont<'_> {
         let tol = self.sys.settings.tol;
         self.last_m = None;
         for it in 0..=max_it {
-            let (r, m) = self.eval(y);
-            let rn = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let (rn, scale, mut a) = self.eval(y);
             let g: f64 = c
                 .iter()
                 .zip(y.iter().zip(yc))
@@ -269,21 +272,19 @@ impl Cont<'_> {
                 return None;
             }
             self.iterations += 1;
-            if rn <= tol * self.scale(y) && g.abs() <= 1e-12 {
-                self.last_m = Some(m);
+            if rn <= tol * scale && g.abs() <= 1e-12 {
+                self.last_m = Some(a);
                 return Some(it);
             }
             if it == max_it {
                 break;
             }
-            let mut a = DMatrix::zeros(n + 1, n + 1);
-            a.view_mut((0, 0), (n, n + 1)).copy_from(&m);
             for j in 0..=n {
                 a[(n, j)] = c[j];
             }
             let mut b = DVector::zeros(n + 1);
             for i in 0..n {
-                b[i] = r[i];
+                b[i] = self.r_buf[i];
             }
             b[n] = g;
             let d = a.lu().solve(&b)?;
@@ -440,6 +441,10 @@ fn run(
         n,
         iterations: 0,
         last_m: None,
+        q_buf: vec![0.0; n],
+        r_buf: vec![0.0; n],
+        jac_buf: vec![0.0; n * n],
+        dro_buf: vec![0.0; n],
     };
     let dir = (p_end - p_start).signum();
     let p_lo = p_start.min(p_end);

@@ -523,7 +523,24 @@ fn hill_multipliers_match_monodromy() {
         let stable_mono = max_mod < 1.0;
         assert_eq!(fl.stable, stable_mono);
         unstable_seen |= !stable_mono;
-        // Liouville: product of multipliers = exp(-∫(δ + f_v) dt)
+        // Liouville: λ₁ + λ₂ = −(δ + mean f_v) (real part; mod iΩ)
+        let mean_fv = if model.kappa == 0.0 {
+            0.0
+        } else {
+            let n = 4096;
+            (0..n)
+                .map(|i| {
+                    let t = TAU / om * i as f64 / n as f64;
+                    let v = velocity_at(&q, om, t);
+                    model.kappa * (model.eta + 1.0) * v.abs().powf(model.eta)
+                })
+                .sum::<f64>()
+                / n as f64
+        };
+        let sum = fl.exponents[0].re + fl.exponents[1].re;
+        let want = -(model.delta + mean_fv);
+        eprintln!("Liouville: sum Re(lambda) {sum:.12e}, -(delta + mean f_v) {want:.12e}");
+        assert!((sum - want).abs() < 1e-8 * want.abs(), "{sum} vs {want}");
     }
     assert!(unstable_seen, "the middle Duffing root must be unstable");
 }

@@ -12,6 +12,8 @@ pub enum CliError {
     #[error(transparent)]
     Solve(#[from] nlsdof::SolveError),
     #[error(transparent)]
+    MultiHarmonic(#[from] nlsdof::multi_harmonic::MhbError),
+    #[error(transparent)]
     Simulation(#[from] nlsdof::simulation::SimulationError),
     #[error(transparent)]
     Signal(#[from] nlsdof_io::signal_file::SignalFileError),

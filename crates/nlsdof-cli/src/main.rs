@@ -30,6 +30,9 @@ enum Command {
     Roots(cmd::roots::Args),
     /// Amplitude-frequency curves at several input levels, as a stepped-sine sweep sees them.
     Frf(cmd::frf::Args),
+    /// Truncation error of the first-order harmonic balance (peak, folds) against the number of harmonics.
+    #[command(name = "hb-error")]
+    HbError(cmd::hb_error::Args),
     /// Simulate the response to a recorded input acceleration (CSV or MAT), writing t,accel,x,v.
     Simulate(cmd::simulate::Args),
     /// Virtual stepped-sine test rig: dwell until steady at each frequency, record amplitude and phase.
@@ -94,6 +97,7 @@ fn main() {
         Command::Equiv(a) => cmd::equiv::run(a),
         Command::Roots(a) => cmd::roots::run(a),
         Command::Frf(a) => cmd::frf::run(a),
+        Command::HbError(a) => cmd::hb_error::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::SteppedSine(a) => cmd::stepped_sine::run(a),
         Command::Signal(a) => cmd::signal::run(a),

@@ -21,6 +21,9 @@
 //!   stability, folds, stepped-sine branch following, backbone, phase
 //!   quadrature.
 //!
+//! * [`multi_harmonic`] — harmonic balance with H harmonics (AFT, analytic
+//!   Jacobian), pseudo-arclength continuation with folds, Hill stability,
+//!   backbone: measures the error of the first-order balance.
 //! * [`vector_fitting`] — linear identification (Section 2.3, Table 3):
 //!   fast relaxed vector fitting of a measured FRF, modal parameters, the
 //!   SDoF linear part; half-power and circle fit for comparison.
@@ -36,6 +39,7 @@ pub mod excitation;
 pub mod harmonic_balance;
 pub mod identification;
 pub mod model;
+pub mod multi_harmonic;
 pub mod power_law;
 pub mod power_sum;
 pub mod signal_processing;

@@ -76,6 +76,10 @@ pub struct Args {
     /// Also write an SVG plot of amplitude vs frequency to FILE.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    /// Harmonics H of the balance: 1 = exact first order (default); 2..64 = multi-harmonic
+    /// balance (constant and even terms included) with continuation and Hill stability.
+    #[arg(long, value_name = "H", default_value_t = 1)]
+    pub harmonics: usize,
 }
 
 fn frf_long_help() -> String {
@@ -186,6 +190,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
 
+    super::frf_mhb::check_harmonics(args.harmonics)?;
+    if args.harmonics > 1 {
+        if args.formulation != FormulationArg::Hb {
+            return Err(CliError::Usage(format!(
+                "--harmonics {} needs --formulation hb (Eq 30 is a first-order approximation)",
+                args.harmonics
+            )));
+        }
+        return super::frf_mhb::run(&args, &model, &gammas, &omegas, f_min, f_max);
+    }
+
     let mut levels = Vec::with_capacity(gammas.len());
     for &gamma in &gammas {
         let response = ForcedResponse::new(&model, gamma, formulation)?;
@@ -251,6 +266,12 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
                         "phase_deg": p.phase.to_degrees(),
                         "stable": p.stable,
                         "sticking": p.sticking,
+                        // first order: x = a cos(Ωt − φ), no other harmonic
+                        "harmonics": [
+                            {"order": 0, "amplitude": 0.0, "phase_deg": 0.0},
+                            {"order": 1, "amplitude": p.amplitude, "phase_deg": p.phase.to_degrees()},
+                        ],
+                        "max_abs_x": p.amplitude,
                     })
                 })
                 .collect();
@@ -284,6 +305,7 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
         "f_n_hz": hz(model.omega_n()),
         "zeta": model.zeta(),
         "formulation": args.formulation.name(),
+        "harmonics": 1,
         "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak", "f_hz": "Hz", "phase_deg": "deg lag of x behind input"},
         "levels": lv,
     });

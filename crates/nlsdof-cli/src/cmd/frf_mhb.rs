@@ -1,0 +1,575 @@
+//! `nlsdof frf --harmonics H` (H ≥ 2): the stepped-sine curves by
+//! multi-harmonic balance (constant and even harmonics included) with
+//! pseudo-arclength continuation and Hill stability
+//! ([`nlsdof::multi_harmonic`]). Output formats extend those of `frf`:
+//! every point carries its harmonics and `max_abs_x`.
+
+use super::frf::Args;
+use crate::error::CliError;
+use nlsdof::multi_harmonic::sweep::{sweep, MhbSweep};
+use nlsdof::multi_harmonic::{
+    harmonic_amplitude, harmonic_phase, max_abs_displacement, regularisation_check,
+    ContinuationOptions, HbSystem, Settings, MAX_HARMONICS,
+};
+use nlsdof::{Model, SweepDirection};
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use serde_json::json;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+
+/// Largest `--harmonics` accepted on the command line.
+pub const CLI_MAX_HARMONICS: usize = if MAX_HARMONICS < 64 {
+    MAX_HARMONICS
+} else {
+    64
+};
+
+/// Refuses a model without any damping: its forced response has no steady
+/// state at resonance (the amplitude is unbounded) and every periodic
+/// solution is only neutrally stable, so neither continuation nor Hill's
+/// method has a defined answer.
+pub fn check_damped(model: &Model, flag: &str) -> Result<(), CliError> {
+    let c_e = model
+        .nonlinear_damping
+        .map(|d| d.coefficient)
+        .unwrap_or(0.0);
+    if model.damping == 0.0 && c_e == 0.0 {
+        return Err(CliError::Usage(format!(
+            "{flag}: the model has no damping (c = 0 and no c_e term): at resonance there is no forced steady state and every periodic solution is only neutrally stable; give c > 0 or a damping term"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks `--harmonics`.
+pub fn check_harmonics(h: usize) -> Result<usize, CliError> {
+    if h == 0 || h > CLI_MAX_HARMONICS {
+        return Err(CliError::Usage(format!(
+            "--harmonics {h} is not allowed: need an integer from 1 (exact first-order balance) to {CLI_MAX_HARMONICS}"
+        )));
+    }
+    Ok(h)
+}
+
+fn hz(omega: f64) -> f64 {
+    omega / (2.0 * PI)
+}
+
+/// One level.
+pub struct MhbLevel {
+    pub gamma: f64,
+    pub sweep: MhbSweep,
+    /// Regularised models only: the regularisation check (ε → ε/4) at the
+    /// swept point of largest first-harmonic amplitude: (f Hz, relative change).
+    pub regularisation: Option<(f64, f64)>,
+}
+
+/// Computes the levels (in memory, nothing written).
+pub fn compute(
+    model: &Model,
+    gammas: &[f64],
+    omegas: &[f64],
+    direction: SweepDirection,
+    h: usize,
+) -> Result<Vec<MhbLevel>, CliError> {
+    let n = model.normalised()?;
+    let mut out = Vec::with_capacity(gammas.len());
+    for &gamma in gammas {
+        let s = sweep(
+            &n,
+            gamma,
+            h,
+            omegas,
+            direction,
+            settings_for(model),
+            &ContinuationOptions::default(),
+        )?;
+        let mut regularisation = None;
+        let mut sys = HbSystem::new(&n, gamma, h, settings_for(model))?;
+        if sys.is_regularised() {
+            if let Some(p) = s.points.iter().max_by(|a, b| {
+                harmonic_amplitude(&a.coefficients, 1)
+                    .total_cmp(&harmonic_amplitude(&b.coefficients, 1))
+            }) {
+                sys.set_samples(s.samples)?;
+                let chk = regularisation_check(&sys, p.omega, &p.coefficients)?;
+                regularisation = Some((hz(p.omega), chk.relative_change));
+            }
+        }
+        out.push(MhbLevel {
+            gamma,
+            sweep: s,
+            regularisation,
+        });
+    }
+    Ok(out)
+}
+
+/// Numerical settings for a model: the defaults, except that a model with a
+/// negative exponent (regularised, e.g. Coulomb friction) uses an aliasing
+/// tolerance of 1e-6 (relative to γ): the truncation error of HB for a
+/// friction jump decays only like 1/H (measured 7e-4 at H = 25, see
+/// docs/multi-harmonic.md) and dominates anyway, while resolving the fixed
+/// regularisation layer to 1e-11 near resonance (velocity ≫ ε) would need
+/// more than the 2^18 samples allowed. For the same reason the
+/// regularisation width is ε_rel = 1e-2 (library default 1e-3): the layer
+/// is resolved with ~10 times fewer samples (a Coulomb sweep through
+/// resonance: 41 s → see docs/multi-harmonic.md).
+pub fn settings_for(model: &Model) -> Settings {
+    let negative = model.nonlinear_stiffness.is_some_and(|t| t.exponent < 0.0)
+        || model.nonlinear_damping.is_some_and(|t| t.exponent < 0.0);
+    let mut s = Settings::default();
+    if negative {
+        s.aliasing_tol = 1e-6;
+        s.regularisation = 1e-2;
+    }
+    s
+}
+
+fn harmonics_json(q: &[f64]) -> Vec<serde_json::Value> {
+    let h = (q.len() - 1) / 2;
+    (0..=h)
+        .map(|k| {
+            json!({
+                "order": k,
+                "amplitude": harmonic_amplitude(q, k),
+                "phase_deg": harmonic_phase(q, k).to_degrees(),
+            })
+        })
+        .collect()
+}
+
+/// Higher-harmonic content `√(Σ_{k≠1} A_k²) / A₁`.
+fn distortion(q: &[f64]) -> f64 {
+    let h = (q.len() - 1) / 2;
+    let a1 = harmonic_amplitude(q, 1);
+    let s: f64 = (0..=h)
+        .filter(|&k| k != 1)
+        .map(|k| harmonic_amplitude(q, k).powi(2))
+        .sum();
+    s.sqrt() / a1
+}
+
+pub fn run(
+    args: &Args,
+    model: &Model,
+    gammas: &[f64],
+    omegas: &[f64],
+    f_min: f64,
+    f_max: f64,
+) -> Result<(), CliError> {
+    let h = args.harmonics;
+    check_damped(model, "--harmonics")?;
+    let levels = compute(model, gammas, omegas, args.sweep.to_core(), h)?;
+    for (i, l) in levels.iter().enumerate() {
+        if let Some(w) = &l.sweep.warning {
+            eprintln!(
+                "nlsdof: warning: level {} (gamma = {}): continuation stopped early, partial curve up to {:.6} Hz: {w}",
+                i + 1,
+                l.gamma,
+                l.sweep.points.last().map(|p| hz(p.omega)).unwrap_or(f64::NAN)
+            );
+        }
+    }
+    let mut text = if args.json {
+        json_output(args, model, &levels)
+    } else if args.csv {
+        csv_output(args, &levels)
+    } else {
+        text_output(args, model, &levels, f_min, f_max)
+    };
+    if let Some(path) = &args.plot {
+        let title = format!(
+            "{} - harmonic balance, H = {h}, sweep {}",
+            args.model
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            args.sweep.name()
+        );
+        let svg = render(&title, &levels, f_min, f_max)?;
+        nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;
+        if !args.json && !args.csv {
+            let _ = writeln!(text, "\nplot written to {}", path.display());
+        }
+    }
+    print!("{text}");
+    Ok(())
+}
+
+fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
+    let lv: Vec<_> = levels
+        .iter()
+        .map(|l| {
+            let points: Vec<_> = l
+                .sweep
+                .points
+                .iter()
+                .map(|p| {
+                    let q = &p.coefficients;
+                    json!({
+                        "f_hz": hz(p.omega),
+                        "amplitude": harmonic_amplitude(q, 1),
+                        "phase_deg": harmonic_phase(q, 1).to_degrees(),
+                        "stable": p.stable,
+                        "sticking": false,
+                        "max_abs_x": max_abs_displacement(q),
+                        "harmonics": harmonics_json(q),
+                    })
+                })
+                .collect();
+            let jumps: Vec<_> = l
+                .sweep
+                .jumps
+                .iter()
+                .map(|j| {
+                    json!({
+                        "f_hz": hz(j.omega),
+                        "amplitude_before": j.amplitude_before,
+                        "amplitude_after": j.amplitude_after,
+                    })
+                })
+                .collect();
+            json!({
+                "gamma": l.gamma,
+                "sweep": args.sweep.name(),
+                "points": points,
+                "jumps": jumps,
+                "folds_hz": l.sweep.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
+                "fold_amplitudes": l.sweep.folds.iter().map(|f| f.1).collect::<Vec<_>>(),
+                "samples_per_period": l.sweep.samples,
+                "regularisation_check": l.regularisation.map(|(f, c)| json!({"f_hz": f, "relative_change_eps_over_4": c})),
+                "warning": l.sweep.warning.as_ref().map(|w| w.to_string()),
+            })
+        })
+        .collect();
+    let out = json!({
+        "model": args.model.display().to_string(),
+        "f_n_hz": hz(model.omega_n()),
+        "zeta": model.zeta(),
+        "formulation": "hb",
+        "harmonics": args.harmonics,
+        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak (first harmonic)", "f_hz": "Hz", "phase_deg": "deg lag of the harmonic behind the input (harmonic k: A_k cos(k Omega t - phi_k))", "max_abs_x": "m"},
+        "levels": lv,
+    });
+    format!("{out}\n")
+}
+
+fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
+    let h = args.harmonics;
+    let mut s =
+        String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking,max_abs_x");
+    for k in 0..=h {
+        let _ = write!(s, ",a{k}");
+    }
+    s.push('\n');
+    for (i, l) in levels.iter().enumerate() {
+        for p in &l.sweep.points {
+            let q = &p.coefficients;
+            let _ = write!(
+                s,
+                "{},{},{},{},{},{},{},false,{}",
+                i + 1,
+                l.gamma,
+                hz(p.omega),
+                harmonic_amplitude(q, 1),
+                harmonic_phase(q, 1).to_degrees(),
+                args.sweep.name(),
+                p.stable,
+                max_abs_displacement(q)
+            );
+            for k in 0..=h {
+                let _ = write!(s, ",{}", harmonic_amplitude(q, k));
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_max: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "model {}: {}",
+        args.model.display(),
+        super::roots::model_summary(model)
+    );
+    let _ = writeln!(
+        s,
+        "stepped-sine sweep {}, {} .. {} Hz, {} steps; harmonic balance with H = {} harmonics (constant and even terms included), pseudo-arclength continuation, Hill stability",
+        args.sweep.name(),
+        f_min,
+        f_max,
+        args.steps,
+        args.harmonics
+    );
+    let _ = writeln!(
+        s,
+        "amplitudes zero-to-peak in m (first harmonic unless stated); phase = lag of x behind the input, deg"
+    );
+    for (i, l) in levels.iter().enumerate() {
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "level {}: gamma = {} m/s^2 zero-to-peak ({} m/s^2 peak-to-peak), {} samples per period",
+            i + 1,
+            l.gamma,
+            2.0 * l.gamma,
+            l.sweep.samples
+        );
+        if let Some(p) = l.sweep.points.iter().max_by(|a, b| {
+            harmonic_amplitude(&a.coefficients, 1)
+                .total_cmp(&harmonic_amplitude(&b.coefficients, 1))
+        }) {
+            let q = &p.coefficients;
+            let _ = writeln!(
+                s,
+                "  peak (swept)       {:.6e} m at {:.6} Hz, phase lag {:.2} deg, max|x| {:.6e} m",
+                harmonic_amplitude(q, 1),
+                hz(p.omega),
+                harmonic_phase(q, 1).to_degrees(),
+                max_abs_displacement(q)
+            );
+        }
+        if let Some(p) = l
+            .sweep
+            .points
+            .iter()
+            .max_by(|a, b| distortion(&a.coefficients).total_cmp(&distortion(&b.coefficients)))
+        {
+            let q = &p.coefficients;
+            let k_max = (0..=args.harmonics)
+                .filter(|&k| k != 1)
+                .max_by(|&a, &b| harmonic_amplitude(q, a).total_cmp(&harmonic_amplitude(q, b)))
+                .unwrap_or(0);
+            let _ = writeln!(
+                s,
+                "  harmonic content   largest at {:.6} Hz: sqrt(sum A_k^2, k != 1)/A_1 = {:.3e}, mostly harmonic {k_max} ({:.3e} m)",
+                hz(p.omega),
+                distortion(q),
+                harmonic_amplitude(q, k_max)
+            );
+        }
+        let unstable = l.sweep.points.iter().filter(|p| !p.stable).count();
+        if unstable > 0 {
+            let _ = writeln!(
+                s,
+                "  no stable state    at {unstable} steps (followed state unstable)"
+            );
+        }
+        if l.sweep.jumps.is_empty() {
+            let _ = writeln!(s, "  jumps              none");
+        }
+        for j in &l.sweep.jumps {
+            let _ = writeln!(
+                s,
+                "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
+                hz(j.omega),
+                j.amplitude_before,
+                j.amplitude_after,
+                if j.amplitude_after > j.amplitude_before {
+                    "up"
+                } else {
+                    "down"
+                }
+            );
+        }
+        if l.sweep.folds.is_empty() {
+            let _ = writeln!(s, "  folds              none on the branch");
+        }
+        for f in &l.sweep.folds {
+            let _ = writeln!(
+                s,
+                "  fold               at {:.6} Hz, amplitude {:.6e} m",
+                hz(f.0),
+                f.1
+            );
+        }
+        if let Some((f, c)) = l.regularisation {
+            let _ = writeln!(
+                s,
+                "  regularisation     friction/negative exponent smoothed; at the peak ({f:.6} Hz) eps -> eps/4 changes A_1 by {c:.2e} (relative)"
+            );
+        }
+        if let Some(w) = &l.sweep.warning {
+            let _ = writeln!(s, "  warning            partial curve: {w}");
+        }
+    }
+    s
+}
+
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
+    CliError::Usage(format!("plot failed: {e}"))
+}
+
+/// Two panels: first-harmonic amplitude (branch line, swept markers,
+/// dashed max|x|) and the harmonic content `A_k / A₁` (log scale) of the
+/// swept points.
+fn render(title: &str, levels: &[MhbLevel], f_min: f64, f_max: f64) -> Result<String, CliError> {
+    crate::fonts::register();
+    let mut a_max: f64 = 0.0;
+    for l in levels {
+        for p in &l.sweep.branch {
+            a_max = a_max.max(p.amplitude(1));
+        }
+        for p in &l.sweep.points {
+            a_max = a_max.max(max_abs_displacement(&p.coefficients));
+        }
+    }
+    if !(a_max > 0.0 && a_max.is_finite()) {
+        a_max = 1e-3;
+    }
+    let (unit, scale) = if a_max < 1e-3 {
+        ("µm", 1e6)
+    } else {
+        ("mm", 1e3)
+    };
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1100, 900)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let (top, bottom) = root.split_vertically(520);
+        let mut c1 = ChartBuilder::on(&top)
+            .caption(title, ("sans-serif", 18))
+            .margin(14)
+            .x_label_area_size(40)
+            .y_label_area_size(78)
+            .build_cartesian_2d(f_min..f_max, 0.0..a_max * 1.08 * scale)
+            .map_err(plot_err)?;
+        c1.configure_mesh()
+            .x_desc("Frequency f [Hz]")
+            .y_desc(format!("First harmonic A1 [{unit}]; dashed: max|x|"))
+            .axis_desc_style(("sans-serif", 15))
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(plot_err)?;
+        for (i, l) in levels.iter().enumerate() {
+            let c = COLOURS[i % COLOURS.len()];
+            c1.draw_series(LineSeries::new(
+                l.sweep
+                    .branch
+                    .iter()
+                    .filter(|p| hz(p.omega) >= f_min && hz(p.omega) <= f_max)
+                    .map(|p| (hz(p.omega), p.amplitude(1) * scale)),
+                c.stroke_width(2),
+            ))
+            .map_err(plot_err)?
+            .label(format!("γ = {}", l.gamma))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+            c1.draw_series(DashedLineSeries::new(
+                l.sweep
+                    .points
+                    .iter()
+                    .map(|p| (hz(p.omega), max_abs_displacement(&p.coefficients) * scale)),
+                5,
+                4,
+                c.stroke_width(1),
+            ))
+            .map_err(plot_err)?;
+            let step = l.sweep.points.len().div_ceil(100).max(1);
+            c1.draw_series(l.sweep.points.iter().step_by(step).map(|p| {
+                let pt = (hz(p.omega), harmonic_amplitude(&p.coefficients, 1) * scale);
+                if p.stable {
+                    Circle::new(pt, 2, c.filled())
+                } else {
+                    Circle::new(pt, 3, c.stroke_width(1))
+                }
+            }))
+            .map_err(plot_err)?;
+        }
+        c1.configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(plot_err)?;
+
+        // harmonic content, log10(A_k / A_1)
+        let h = levels
+            .first()
+            .and_then(|l| l.sweep.points.first())
+            .map(|p| (p.coefficients.len() - 1) / 2)
+            .unwrap_or(1);
+        let mut lo: f64 = -1.0;
+        let mut series: Vec<(usize, usize, Vec<(f64, f64)>)> = Vec::new();
+        for (i, l) in levels.iter().enumerate() {
+            for k in (0..=h).filter(|&k| k != 1).take(6) {
+                let pts: Vec<(f64, f64)> = l
+                    .sweep
+                    .points
+                    .iter()
+                    .filter_map(|p| {
+                        let r = harmonic_amplitude(&p.coefficients, k)
+                            / harmonic_amplitude(&p.coefficients, 1);
+                        (r > 1e-12).then(|| (hz(p.omega), r.log10()))
+                    })
+                    .collect();
+                for &(_, v) in &pts {
+                    lo = lo.min(v);
+                }
+                if !pts.is_empty() {
+                    series.push((i, k, pts));
+                }
+            }
+        }
+        let lo = lo.floor().max(-12.0);
+        let mut c2 = ChartBuilder::on(&bottom)
+            .margin(14)
+            .x_label_area_size(40)
+            .y_label_area_size(78)
+            .build_cartesian_2d(f_min..f_max, lo..0.5)
+            .map_err(plot_err)?;
+        c2.configure_mesh()
+            .x_desc("Frequency f [Hz]")
+            .y_desc("log10(A_k / A_1), swept points")
+            .axis_desc_style(("sans-serif", 15))
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(plot_err)?;
+        let mut labelled = std::collections::HashSet::new();
+        for (i, k, pts) in series {
+            let c = COLOURS[i % COLOURS.len()];
+            let (on, off) = match k {
+                0 => (2, 3),
+                2 => (8, 3),
+                3 => (1, 0),
+                _ => (4, 2),
+            };
+            let style = c.stroke_width(if k == 3 { 2 } else { 1 });
+            let s = if off == 0 {
+                c2.draw_series(LineSeries::new(pts, style))
+                    .map_err(plot_err)?
+            } else {
+                c2.draw_series(DashedLineSeries::new(pts, on, off, style))
+                    .map_err(plot_err)?
+            };
+            if labelled.insert(k) {
+                s.label(format!("k = {k}")).legend(move |(x, y)| {
+                    DashedPathElement::new(
+                        vec![(x, y), (x + 20, y)],
+                        on.max(1),
+                        off,
+                        BLACK.stroke_width(1),
+                    )
+                });
+            }
+        }
+        c2.configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(plot_err)?;
+        root.present().map_err(plot_err)?;
+    }
+    Ok(svg)
+}

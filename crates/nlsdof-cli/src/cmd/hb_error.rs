@@ -1,0 +1,290 @@
+//! `nlsdof hb-error`: how wrong is the first-order harmonic balance? The
+//! truncation error in the resonance peak and the fold frequencies against
+//! the number of harmonics H, until converged
+//! ([`nlsdof::multi_harmonic::truncation`]).
+
+use super::roots::{check_frequency, check_gamma, load_model, model_summary};
+use crate::error::CliError;
+use nlsdof::multi_harmonic::truncation::{truncation_study, TruncationStudy};
+use nlsdof::multi_harmonic::ContinuationOptions;
+use serde_json::json;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Harmonic counts tried, in order (odd first: symmetric power laws excite
+/// odd harmonics; even ones are part of every balance and stay zero there).
+const LADDER: [usize; 12] = [1, 3, 5, 7, 9, 11, 15, 21, 31, 41, 51, 63];
+
+#[derive(clap::Args)]
+#[command(
+    about = "Truncation error of the first-order harmonic balance (peak, folds) against the number of harmonics",
+    after_long_help = "DESCRIPTION:
+  For each input level, the response curve is continued (pseudo-arclength) over the band
+  with H = 1, 3, 5, 7, 9, 11, 15, 21, 31, 41, 51, 63 harmonics (constant and even terms
+  included) until the resonance peak (first-harmonic amplitude and frequency, located on
+  the branch) and every fold frequency change by less than --tol (relative) from one H to
+  the next. That H is the reference; the table gives each H's error against it. H = 1 is
+  today's exact first-order balance (the paper's, Eq 11).
+
+  If the ladder ends before convergence the study is reported as not converged, with the
+  last change, and a warning on stderr (exit code 0).
+
+OUTPUT:
+  text (default): per level, one row per H: peak amplitude and frequency, max|x| at the
+        peak, fold frequencies, error against the reference, samples per period
+  --json: {\"levels\":[{\"gamma\":..,\"converged\":..,\"reference_harmonics\":..,\"rows\":[{\"harmonics\":..,
+        \"peak\":{\"f_hz\":..,\"amplitude\":..,\"max_abs_x\":..},\"folds_hz\":[..],\"fold_amplitudes\":[..],
+        \"peak_amplitude_error\":..,\"peak_frequency_error\":..,\"fold_frequency_errors\":[..],
+        \"change\":..,\"samples_per_period\":..,\"points\":..}]}]}
+
+EXAMPLES:
+  nlsdof hb-error --model examples/duffing-strong.toml --gamma 0.5,2 --f-min 8 --f-max 16
+  nlsdof hb-error --model examples/har-wing.toml --gamma 1.23 --f-min 5.2 --f-max 5.6 --json"
+)]
+pub struct Args {
+    /// Model file (TOML, SI units).
+    #[arg(long, value_name = "FILE")]
+    pub model: PathBuf,
+    /// Input levels gamma, m/s^2 zero-to-peak, comma-separated.
+    #[arg(long, value_name = "G1,G2,..", allow_hyphen_values = true)]
+    pub gamma: String,
+    /// Lowest frequency, Hz (default 0.8 f_n).
+    #[arg(long = "f-min", value_name = "F0", allow_hyphen_values = true)]
+    pub f_min: Option<f64>,
+    /// Highest frequency, Hz (default 2 f_n).
+    #[arg(long = "f-max", value_name = "F1", allow_hyphen_values = true)]
+    pub f_max: Option<f64>,
+    /// Convergence tolerance (relative change between successive H).
+    #[arg(long, default_value_t = 1e-6)]
+    pub tol: f64,
+    /// Largest H of the ladder (1..=63).
+    #[arg(long = "h-max", default_value_t = 63)]
+    pub h_max: usize,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn hz(w: f64) -> f64 {
+    w / (2.0 * PI)
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let mut gammas = Vec::new();
+    for item in args.gamma.split(',') {
+        let v: f64 = item.trim().parse().map_err(|_| {
+            CliError::Usage(format!(
+                "--gamma: '{}' is not a number: give input levels (m/s^2, zero-to-peak) as a comma-separated list",
+                item.trim()
+            ))
+        })?;
+        gammas.push(check_gamma(v)?);
+    }
+    if !(args.tol.is_finite() && args.tol > 0.0 && args.tol < 1.0) {
+        return Err(CliError::Usage(format!(
+            "--tol {} is not allowed: need 0 < tol < 1",
+            args.tol
+        )));
+    }
+    if args.h_max == 0 || args.h_max > 63 {
+        return Err(CliError::Usage(format!(
+            "--h-max {} is not allowed: need an integer from 1 to 63",
+            args.h_max
+        )));
+    }
+    let model = load_model(&args.model)?;
+    super::frf_mhb::check_damped(&model, "hb-error")?;
+    let fn_hz = hz(model.omega_n());
+    let f_min = check_frequency("--f-min", args.f_min.unwrap_or(0.8 * fn_hz))?;
+    let f_max = check_frequency("--f-max", args.f_max.unwrap_or(2.0 * fn_hz))?;
+    if f_min >= f_max {
+        return Err(CliError::Usage(format!(
+            "--f-min {f_min} must be below --f-max {f_max} (Hz)"
+        )));
+    }
+    let ladder: Vec<usize> = LADDER
+        .iter()
+        .copied()
+        .filter(|&h| h <= args.h_max)
+        .collect();
+    let n = model.normalised()?;
+    let mut studies = Vec::new();
+    for &g in &gammas {
+        let st = truncation_study(
+            &n,
+            g,
+            2.0 * PI * f_min,
+            2.0 * PI * f_max,
+            &ladder,
+            args.tol,
+            super::frf_mhb::settings_for(&model),
+            &ContinuationOptions::default(),
+        )?;
+        if !st.converged {
+            let last = st.rows.last().map(|r| r.change).unwrap_or(f64::NAN);
+            eprintln!(
+                "nlsdof: warning: gamma = {g}: not converged to --tol {} by H = {} (last change {last:.3e}); errors are against H = {}",
+                args.tol,
+                ladder.last().unwrap_or(&1),
+                st.rows[st.reference].harmonics
+            );
+        }
+        for r in &st.rows {
+            if let Some(w) = &r.warning {
+                eprintln!(
+                    "nlsdof: warning: gamma = {g}, H = {}: continuation stopped early: {w}",
+                    r.harmonics
+                );
+            }
+        }
+        studies.push((g, st));
+    }
+    if args.json {
+        print!("{}", json_output(&args, fn_hz, f_min, f_max, &studies));
+    } else {
+        print!("{}", text_output(&args, &model, f_min, f_max, &studies));
+    }
+    Ok(())
+}
+
+fn errors(st: &TruncationStudy, i: usize) -> (Option<f64>, Option<f64>, Vec<Option<f64>>) {
+    let r = &st.rows[i];
+    let reference = &st.rows[st.reference];
+    let (pa, pf) = match (r.peak, reference.peak) {
+        (Some(p), Some(q)) => (Some(rel(p.1, q.1)), Some(rel(p.0, q.0))),
+        _ => (None, None),
+    };
+    let folds = if r.folds.len() == reference.folds.len() {
+        r.folds
+            .iter()
+            .zip(&reference.folds)
+            .map(|(a, b)| Some(rel(a.0, b.0)))
+            .collect()
+    } else {
+        r.folds.iter().map(|_| None).collect()
+    };
+    (pa, pf, folds)
+}
+
+fn json_output(
+    args: &Args,
+    fn_hz: f64,
+    f_min: f64,
+    f_max: f64,
+    studies: &[(f64, TruncationStudy)],
+) -> String {
+    let levels: Vec<_> = studies
+        .iter()
+        .map(|(g, st)| {
+            let rows: Vec<_> = st
+                .rows
+                .iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    let (pa, pf, fe) = errors(st, i);
+                    json!({
+                        "harmonics": r.harmonics,
+                        "peak": r.peak.map(|p| json!({"f_hz": hz(p.0), "amplitude": p.1, "max_abs_x": p.2})),
+                        "folds_hz": r.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
+                        "fold_amplitudes": r.folds.iter().map(|f| f.1).collect::<Vec<_>>(),
+                        "peak_amplitude_error": pa,
+                        "peak_frequency_error": pf,
+                        "fold_frequency_errors": fe,
+                        "change": if r.change.is_finite() { Some(r.change) } else { None },
+                        "samples_per_period": r.samples,
+                        "points": r.points,
+                        "warning": r.warning.as_ref().map(|w| w.to_string()),
+                    })
+                })
+                .collect();
+            json!({
+                "gamma": g,
+                "converged": st.converged,
+                "reference_harmonics": st.rows[st.reference].harmonics,
+                "rows": rows,
+            })
+        })
+        .collect();
+    let out = json!({
+        "model": args.model.display().to_string(),
+        "f_n_hz": fn_hz,
+        "f_min_hz": f_min,
+        "f_max_hz": f_max,
+        "tol": args.tol,
+        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak (first harmonic)", "errors": "relative, against the reference H"},
+        "levels": levels,
+    });
+    format!("{out}\n")
+}
+
+fn text_output(
+    args: &Args,
+    model: &nlsdof::Model,
+    f_min: f64,
+    f_max: f64,
+    studies: &[(f64, TruncationStudy)],
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "model {}: {}",
+        args.model.display(),
+        model_summary(model)
+    );
+    let _ = writeln!(
+        s,
+        "band {f_min} .. {f_max} Hz; errors relative to the converged H (tol {:e}); amplitudes zero-to-peak, first harmonic",
+        args.tol
+    );
+    for (g, st) in studies {
+        let _ = writeln!(s);
+        let reference = &st.rows[st.reference];
+        let _ = writeln!(
+            s,
+            "gamma = {g} m/s^2: {} at H = {}",
+            if st.converged {
+                "converged"
+            } else {
+                "NOT converged, errors against"
+            },
+            reference.harmonics
+        );
+        let _ = writeln!(
+            s,
+            "   H   peak a1 [m]    peak f [Hz]   max|x| [m]     err a1     err f_peak  folds [Hz] (err)                     N"
+        );
+        for (i, r) in st.rows.iter().enumerate() {
+            let (pa, pf, fe) = errors(st, i);
+            let peak = match r.peak {
+                Some(p) => format!("{:.6e}  {:<12.7}  {:.6e}", p.1, hz(p.0), p.2),
+                None => format!("{:<40}", "no peak in the band"),
+            };
+            let e = |v: Option<f64>| v.map(|x| format!("{x:.2e}")).unwrap_or_else(|| "-".into());
+            let folds: Vec<String> = r
+                .folds
+                .iter()
+                .zip(&fe)
+                .map(|(f, err)| format!("{:.7} ({})", hz(f.0), e(*err)))
+                .collect();
+            let _ = writeln!(
+                s,
+                "{:4}   {peak}   {:>9}  {:>9}   {:<38} {}",
+                r.harmonics,
+                e(pa),
+                e(pf),
+                if folds.is_empty() {
+                    "none".into()
+                } else {
+                    folds.join(", ")
+                },
+                r.samples
+            );
+        }
+    }
+    s
+}

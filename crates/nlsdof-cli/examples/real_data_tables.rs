@@ -77,7 +77,11 @@ fn main() {
         .unwrap_or_else(|| vec![ModelKind::Duffing, ModelKind::Generalised]);
     let mut out = String::new();
     use std::fmt::Write;
-    for set in ["cc_beam_no_magnet_24C", "cc_beam_magnet_24C", "cantilever_no_magnet"] {
+    for set in [
+        "cc_beam_no_magnet_24C",
+        "cc_beam_magnet_24C",
+        "cantilever_no_magnet",
+    ] {
         let dir = std::path::Path::new(&root).join(set);
         let data = match read_beam_dir(&dir, Runs::Up) {
             Ok(d) => d,

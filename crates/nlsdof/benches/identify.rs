@@ -72,10 +72,27 @@ fn bench(c: &mut Criterion) {
     g.bench_function("equation_error_magnitude_5x200", |b| {
         b.iter(|| solve_magnitude(&prep, terms, 2.6, 1.7, None).unwrap())
     });
-    let rho = Axis { min: 0.0, max: 10.0, n: 64 };
-    let eta = Axis { min: -1.0, max: 8.0, n: 64 };
+    let rho = Axis {
+        min: 0.0,
+        max: 10.0,
+        n: 64,
+    };
+    let eta = Axis {
+        min: -1.0,
+        max: 8.0,
+        n: 64,
+    };
     g.bench_function("landscape_64x64_phase_5x200", |b| {
-        b.iter(|| landscape(&prep, terms, rho, eta, LandscapePhase::Detect { delay: 0.0 }).unwrap())
+        b.iter(|| {
+            landscape(
+                &prep,
+                terms,
+                rho,
+                eta,
+                LandscapePhase::Detect { delay: 0.0 },
+            )
+            .unwrap()
+        })
     });
     g.bench_function("landscape_64x64_magnitude_5x200", |b| {
         b.iter(|| landscape(&prep, terms, rho, eta, LandscapePhase::Ignore).unwrap())

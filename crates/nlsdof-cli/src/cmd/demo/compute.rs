@@ -213,6 +213,8 @@ pub struct FitEntry {
     pub integer_table: Vec<IntegerRow>,
     pub pq: Vec<PhaseQuadratureRow>,
     pub seconds: f64,
+    /// The staged identification behind `result` (real-exponent fits).
+    pub identification: Option<Box<nlsdof::identification::Identification>>,
 }
 
 /// Stage 4/5 result for one level.
@@ -419,8 +421,9 @@ impl Demo {
              -> Result<FitEntry, CliError> {
                 pb.set_message(format!("{key}: {label}"));
                 let t = Instant::now();
-                let r = staged_fit(data, &spec, &opts)
+                let staged = staged_fit(data, &spec, &opts)
                     .map_err(|e| CliError::Usage(format!("demo: fit '{label}' failed: {e}")))?;
+                let r = staged.fit.clone();
                 pb.inc(1);
                 Ok(FitEntry {
                     id,
@@ -433,6 +436,7 @@ impl Demo {
                     result: r,
                     integer_table: Vec::new(),
                     seconds: t.elapsed().as_secs_f64(),
+                    identification: Some(Box::new(staged)),
                 })
             };
             fits.push(real_fit(
@@ -522,6 +526,7 @@ impl Demo {
                     result: best,
                     integer_table: table,
                     seconds: t.elapsed().as_secs_f64(),
+                    identification: None,
                 })
             };
             let dg_int = int_fit(
@@ -575,6 +580,7 @@ impl Demo {
                     result,
                     integer_table: Vec::new(),
                     seconds: t.elapsed().as_secs_f64(),
+                    identification: None,
                 });
             }
             fits.extend([dg_int, dg_real, g_int, g_real, g_free]);
@@ -913,7 +919,7 @@ fn staged_fit(
     data: &Dataset,
     spec: &FitSpec,
     opts: &FitOptions,
-) -> Result<FitResult, nlsdof::identification::IdentifyError> {
+) -> Result<nlsdof::identification::Identification, nlsdof::identification::IdentifyError> {
     use nlsdof::identification::models::{Term, ALPHA, BETA, DELTA, GAIN, KAPPA};
     use nlsdof::identification::{FitPlan, GainChoice, PARAM_NAMES};
     let mut plan = FitPlan::new(spec.kind);
@@ -932,5 +938,5 @@ fn staged_fit(
     }
     plan.starts = 1;
     plan.seed = opts.seed;
-    Ok(nlsdof::identification::identify(data, &plan, &|| {})?.fit)
+    nlsdof::identification::identify(data, &plan, &|| {})
 }

@@ -222,6 +222,14 @@ peak (cubic hardening has the wrong amplitude dependence).\n"
         "**Fig 7 analogue: generalised stiffness and damping** (top: integer ρ, η; bottom: real). \
 Curves and data should be indistinguishable at this scale.\n"
     );
+    img(&mut s, "fig10_landscape.svg", "exponent landscape");
+    let _ = writeln!(
+        s,
+        "**Exponent landscape** (unloaded wing, generalised model, linear part free): the \
+branch-free equation-error cost with the coefficients optimised at every (ρ, η) node, \
+log10(cost/min); white rings are the grid minima the output-error fit (Eq 31) starts from, the \
+red cross is where it ended. This map replaces a blind multistart over the exponents.\n"
+    );
     img(&mut s, "fig9_rms_per_level.svg", "RMS per level");
     let _ = writeln!(
         s,

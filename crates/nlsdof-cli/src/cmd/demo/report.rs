@@ -1122,6 +1122,27 @@ e independent standard normal (SplitMix64 + Box-Muller, one stream per channel s
 }
 
 /// Writes the figures, tables and a provisional summary; returns what [`finish`] needs.
+/// The exponent landscape of the unloaded wing's generalised fit with the
+/// linear part free (`g-free`): where the equation-error minima are and
+/// where the output error ended. `false` if that fit is absent.
+fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, CliError> {
+    let Some(id) = demo
+        .runs
+        .first()
+        .and_then(|r| r.fits.iter().find(|f| f.id == "g-free"))
+        .and_then(|f| f.identification.as_ref())
+    else {
+        return Ok(false);
+    };
+    let svg = crate::cmd::landscape_plot::render(id, crate::cmd::landscape_plot::Kind::Svg)?;
+    write_svg(
+        dir,
+        "fig10_landscape.svg",
+        String::from_utf8_lossy(&svg).into_owned(),
+    )?;
+    Ok(true)
+}
+
 pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliError> {
     let pb = super::compute::stage_bar(8, "6/6 report");
     pb.set_message("figures (SVG, PNG) and tables");
@@ -1155,6 +1176,7 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
     pb.inc(1);
     fig_rms(demo, dir)?;
     fig_time(demo, dir)?;
+    let landscape = fig_landscape(demo, dir)?;
     pb.inc(1);
     let pngs = fig8_png(demo, dir)?;
     pb.inc(1);
@@ -1176,6 +1198,9 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
         ("fig9_rms_per_level.svg".into(), "residuals".into()),
         ("fig8c_time_envelope.svg".into(), "time".into()),
     ];
+    if landscape {
+        figures.push(("fig10_landscape.svg".into(), "landscape".into()));
+    }
     figures.extend(pngs.into_iter().map(|p| (p, "Fig 8".into())));
     Ok(Written {
         summary: summary_json(demo),

@@ -315,12 +315,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         nlsdof_io::atomic::write_atomic(path, s.as_bytes())?;
     }
     if let (Some(path), Some(s)) = (&args.plot, &svg) {
-        if let Err(e) = nlsdof_io::atomic::write_atomic(path, s.as_bytes()) {
-            if let Some(out) = &args.out {
-                let _ = std::fs::remove_file(out);
-            }
-            return Err(e.into());
-        }
+        // Committed together with --out at the end of the run (all or nothing).
+        nlsdof_io::atomic::write_atomic(path, s.as_bytes())?;
     }
     print!("{text}");
     Ok(())

@@ -1,0 +1,436 @@
+//! Issue 11 (reliability): output targets, partial files, several outputs,
+//! standard output errors, sizes, wrong answers, input formats, numbers in
+//! text and silently accepted options — each reproduction of the issue as a
+//! test. The table of input classes in docs/reliability.md is checked by
+//! `reliability_table_matches_docs`.
+
+mod common;
+use common::{example, fails, fails_one_line, ok, write};
+
+use std::path::{Path, PathBuf};
+use std::process::Stdio;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn no_partial(dir: &Path) {
+    let l = listing(dir);
+    assert!(
+        !l.iter().any(|n| n.ends_with(".partial")),
+        "temporary left behind in {}: {l:?}",
+        dir.display()
+    );
+}
+
+fn frf_args(model: &Path) -> Vec<String> {
+    [
+        "frf",
+        "--model",
+        s(model),
+        "--gamma",
+        "0.5,1",
+        "--f-min",
+        "8",
+        "--f-max",
+        "12",
+        "--steps",
+        "40",
+    ]
+    .iter()
+    .map(|x| x.to_string())
+    .collect()
+}
+
+/// Small stepped-sine data (level,gamma,f_hz,amplitude,phase_deg,sweep) from `frf --csv`.
+fn fit_data(dir: &Path) -> PathBuf {
+    let text = ok(&[
+        "frf",
+        "--model",
+        s(&example("duffing-strong.toml")),
+        "--gamma",
+        "0.5,1",
+        "--f-min",
+        "8",
+        "--f-max",
+        "12",
+        "--steps",
+        "15",
+        "--csv",
+    ]);
+    let rows: String = text
+        .lines()
+        .map(|l| l.split(',').take(6).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    write(dir, "data.csv", &rows)
+}
+
+// ------------------------------------------------ 1. special output targets
+
+#[cfg(unix)]
+#[test]
+fn device_target_is_written_through_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let dev = dir.path().join("null");
+    // A copy of /dev/null needs mknod (root); fall back to /dev/null itself.
+    let made = std::process::Command::new("mknod")
+        .args([s(&dev), "c", "1", "3"])
+        .stderr(Stdio::null())
+        .status()
+        .map(|st| st.success())
+        .unwrap_or(false);
+    let target = if made {
+        dev.clone()
+    } else {
+        PathBuf::from("/dev/null")
+    };
+    let mut a = frf_args(&example("duffing-strong.toml"));
+    a.extend(["--plot".into(), s(&target).into()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    ok(&a);
+    let ft = std::fs::metadata(&target).unwrap().file_type();
+    assert!(ft.is_char_device(), "{} was replaced", target.display());
+    no_partial(dir.path());
+}
+
+#[cfg(unix)]
+#[test]
+fn fifo_target_is_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo");
+    if !std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .map(|st| st.success())
+        .unwrap_or(false)
+    {
+        return; // no mkfifo here
+    }
+    let mut a = frf_args(&example("duffing-strong.toml"));
+    a.extend(["--plot".into(), s(&fifo).into()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let err = fails_one_line(&a);
+    assert!(err.contains("FIFO"), "{err}");
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    no_partial(dir.path());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn full_device_is_a_clear_error() {
+    let mut a = frf_args(&example("duffing-strong.toml"));
+    a.extend(["--plot".into(), "/dev/full".into()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+        .args(&a)
+        .stdout(Stdio::null())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("No space left"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+}
+
+#[cfg(unix)]
+#[test]
+fn symlink_target_keeps_the_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let real = write(dir.path(), "real.svg", "old");
+    let link = dir.path().join("link.svg");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    let mut a = frf_args(&example("duffing-strong.toml"));
+    a.extend(["--plot".into(), s(&link).into()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    ok(&a);
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::read_to_string(&real).unwrap().contains("<svg"));
+    no_partial(dir.path());
+}
+
+// ------------------------------------------------------- 2. partial files
+
+#[test]
+fn directory_as_output_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("DIR");
+    std::fs::create_dir(&d).unwrap();
+    let model = example("duffing-strong.toml");
+    let mut a = frf_args(&model);
+    a.extend(["--plot".into(), s(&d).into()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    fails(&a, "directory", &d);
+    no_partial(dir.path());
+    fails(
+        &[
+            "signal",
+            "sine",
+            "--out",
+            s(&d),
+            "--freq",
+            "5",
+            "--amplitude",
+            "1",
+            "--fs",
+            "100",
+            "--duration",
+            "1",
+        ],
+        "directory",
+        &d,
+    );
+    no_partial(dir.path());
+    let sig = dir.path().join("sig.csv");
+    ok(&[
+        "signal",
+        "sine",
+        "--out",
+        s(&sig),
+        "--freq",
+        "5",
+        "--amplitude",
+        "1",
+        "--fs",
+        "200",
+        "--duration",
+        "4",
+    ]);
+    fails(
+        &["spectrogram", "--input", s(&sig), "--csv", s(&d)],
+        "directory",
+        &d,
+    );
+    no_partial(dir.path());
+    assert!(listing(&d).is_empty());
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_and_sighup_remove_temporaries() {
+    for sig in ["TERM", "HUP"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("rig.csv");
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+            .args([
+                "stepped-sine",
+                "--model",
+                s(&example("har-wing.toml")),
+                "--gamma",
+                "0.41,0.62,0.81,1.00,1.23",
+                "--f-min",
+                "5.3",
+                "--f-max",
+                "5.5",
+                "--steps",
+                "2000",
+                "--out",
+                s(&out),
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        // Wait until the temporary exists, then signal.
+        let t0 = std::time::Instant::now();
+        while !listing(dir.path()).iter().any(|n| n.ends_with(".partial")) {
+            assert!(t0.elapsed().as_secs() < 20, "no temporary appeared");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::process::Command::new("kill")
+            .args([&format!("-{sig}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        let st = child.wait().unwrap();
+        assert!(!st.success(), "SIG{sig}: {st:?}");
+        assert!(
+            listing(dir.path()).is_empty(),
+            "SIG{sig}: {:?}",
+            listing(dir.path())
+        );
+    }
+}
+
+// ----------------------------------------------------- 3. several outputs
+
+#[test]
+fn stepped_sine_same_file_twice_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("o.csv");
+    fails(
+        &[
+            "stepped-sine",
+            "--model",
+            s(&example("duffing-strong.toml")),
+            "--gamma",
+            "1",
+            "--f-min",
+            "8",
+            "--f-max",
+            "12",
+            "--steps",
+            "3",
+            "--out",
+            s(&o),
+            "--details",
+            s(&o),
+        ],
+        "two outputs",
+        &o,
+    );
+}
+
+#[test]
+fn fit_out_and_plot_all_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = fit_data(dir.path());
+    let f = dir.path().join("f.toml");
+    fails(
+        &[
+            "fit",
+            s(&data),
+            "--model",
+            "duffing",
+            "--starts",
+            "2",
+            "--out",
+            s(&f),
+            "--plot",
+            s(&f),
+        ],
+        "two outputs",
+        &f,
+    );
+    let d = dir.path().join("DIR");
+    std::fs::create_dir(&d).unwrap();
+    fails(
+        &[
+            "fit",
+            s(&data),
+            "--model",
+            "duffing",
+            "--starts",
+            "2",
+            "--out",
+            s(&f),
+            "--plot",
+            s(&d),
+        ],
+        "directory",
+        &f,
+    );
+}
+
+#[test]
+fn linear_id_failure_keeps_existing_out() {
+    let dir = tempfile::tempdir().unwrap();
+    // FRF of a linear SDoF, f_n = 10 Hz, zeta = 2 %.
+    let (wn, z) = (2.0 * std::f64::consts::PI * 10.0, 0.02);
+    let mut t = String::from("f_hz,re,im\n");
+    for i in 0..300 {
+        let f = 6.0 + 8.0 * i as f64 / 299.0;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let (re, im) = (wn * wn - w * w, 2.0 * z * wn * w);
+        let n = re * re + im * im;
+        t += &format!("{f:?},{:?},{:?}\n", re / n, -im / n);
+    }
+    let frf = write(dir.path(), "frf.csv", &t);
+    let l = write(dir.path(), "l.toml", "# the user's file\n");
+    let d = dir.path().join("DIR");
+    std::fs::create_dir(&d).unwrap();
+    let err = fails_one_line(&["linear-id", s(&frf), "--out", s(&l), "--plot", s(&d)]);
+    assert!(err.contains("directory"), "{err}");
+    assert_eq!(std::fs::read_to_string(&l).unwrap(), "# the user's file\n");
+    no_partial(dir.path());
+}
+
+// ---------------------------------------------------------------- 4. stdout
+
+#[cfg(unix)]
+#[test]
+fn closed_pipe_ends_quietly_and_commits_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("p.svg");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+        .args([
+            "frf",
+            "--model",
+            s(&example("duffing-strong.toml")),
+            "--gamma",
+            "0.5,1,2",
+            "--f-min",
+            "8",
+            "--f-max",
+            "12",
+            "--steps",
+            "20000",
+            "--csv",
+            "--plot",
+            s(&svg),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away, like `| head -0`
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(101), "panicked: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!err.contains("error"), "{err}");
+    assert!(!svg.exists());
+    no_partial(dir.path());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn stdout_on_full_device_is_one_line_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("p.svg");
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+        .args([
+            "frf",
+            "--model",
+            s(&example("duffing-strong.toml")),
+            "--gamma",
+            "0.5,1",
+            "--f-min",
+            "8",
+            "--f-max",
+            "12",
+            "--steps",
+            "40",
+            "--csv",
+            "--plot",
+            s(&svg),
+        ])
+        .stdout(full)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("nlsdof: error: ") && err.contains("No space left"),
+        "{err}"
+    );
+    assert!(!svg.exists());
+    no_partial(dir.path());
+}

@@ -434,3 +434,101 @@ fn stdout_on_full_device_is_one_line_and_no_file() {
     assert!(!svg.exists());
     no_partial(dir.path());
 }
+
+// ------------------------------------------------------------------ 5. sizes
+
+#[test]
+fn huge_sizes_are_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("o.csv");
+    let model = example("duffing-strong.toml");
+    let rig = |extra: &[&str]| {
+        let mut a = vec![
+            "stepped-sine",
+            "--model",
+            s(&model),
+            "--gamma",
+            "1",
+            "--f-min",
+            "8",
+            "--f-max",
+            "12",
+            "--out",
+            s(&o),
+        ];
+        a.extend_from_slice(extra);
+        fails(&a, "", &o)
+    };
+    let e = rig(&["--steps", "1000000000"]);
+    assert!(
+        e.contains("--steps 1000000000") && e.contains("1000000"),
+        "{e}"
+    );
+    let e = rig(&["--steps", "3", "--samples-per-cycle", "1000000000"]);
+    assert!(
+        e.contains("--samples-per-cycle") && e.contains("100000"),
+        "{e}"
+    );
+    let e = fails(
+        &[
+            "signal",
+            "stepped-sine",
+            "--out",
+            s(&o),
+            "--amplitude",
+            "1",
+            "--fs",
+            "100",
+            "--f-min",
+            "1",
+            "--f-max",
+            "2",
+            "--steps",
+            "1000000000",
+            "--dwell-cycles",
+            "1",
+        ],
+        "--steps",
+        &o,
+    );
+    assert!(e.contains("1000000"), "{e}");
+    let sig = dir.path().join("sig.csv");
+    ok(&[
+        "signal",
+        "sine",
+        "--out",
+        s(&sig),
+        "--freq",
+        "5",
+        "--amplitude",
+        "1",
+        "--fs",
+        "200",
+        "--duration",
+        "4",
+    ]);
+    let e = fails(
+        &[
+            "spectrogram",
+            "--input",
+            s(&sig),
+            "--nfft",
+            "100000000000",
+            "--csv",
+            s(&o),
+        ],
+        "FFT length",
+        &o,
+    );
+    assert!(e.contains("16777216"), "{e}");
+    // every limit is stated in --help
+    for (cmd, want) in [
+        (vec!["stepped-sine", "--help"], "1000000"),
+        (vec!["stepped-sine", "--help"], "100000"),
+        (vec!["signal", "stepped-sine", "--help"], "1000000"),
+        (vec!["spectrogram", "--help"], "16777216"),
+    ] {
+        let h = ok(&cmd);
+        assert!(h.contains(want), "{cmd:?} --help does not state {want}");
+    }
+}

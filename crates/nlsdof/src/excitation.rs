@@ -219,6 +219,13 @@ impl SteppedSine {
         if omegas.is_empty() {
             return Err(SimulationError::EmptyInput);
         }
+        if omegas.len() > crate::stepped_sine::MAX_STEPS {
+            return Err(SimulationError::InvalidOption {
+                name: "stepped-sine steps",
+                value: omegas.len() as f64,
+                reason: "must be <= 1000000",
+            });
+        }
         for &w in &omegas {
             check_positive("omega", w)?;
         }

@@ -74,6 +74,20 @@ fn fit_data(dir: &Path) -> PathBuf {
     write(dir, "data.csv", &rows)
 }
 
+/// FRF (f_hz,re,im) of a linear SDoF, f_n = 10 Hz, zeta = 2 %.
+fn sdof_frf_text() -> String {
+    let (wn, z) = (2.0 * std::f64::consts::PI * 10.0, 0.02);
+    let mut t = String::from("f_hz,re,im\n");
+    for i in 0..300 {
+        let f = 6.0 + 8.0 * i as f64 / 299.0;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let (re, im) = (wn * wn - w * w, 2.0 * z * wn * w);
+        let n = re * re + im * im;
+        t += &format!("{f:?},{:?},{:?}\n", re / n, -im / n);
+    }
+    t
+}
+
 // ------------------------------------------------ 1. special output targets
 
 #[cfg(unix)]
@@ -337,16 +351,7 @@ fn fit_out_and_plot_all_or_nothing() {
 #[test]
 fn linear_id_failure_keeps_existing_out() {
     let dir = tempfile::tempdir().unwrap();
-    // FRF of a linear SDoF, f_n = 10 Hz, zeta = 2 %.
-    let (wn, z) = (2.0 * std::f64::consts::PI * 10.0, 0.02);
-    let mut t = String::from("f_hz,re,im\n");
-    for i in 0..300 {
-        let f = 6.0 + 8.0 * i as f64 / 299.0;
-        let w = 2.0 * std::f64::consts::PI * f;
-        let (re, im) = (wn * wn - w * w, 2.0 * z * wn * w);
-        let n = re * re + im * im;
-        t += &format!("{f:?},{:?},{:?}\n", re / n, -im / n);
-    }
+    let t = sdof_frf_text();
     let frf = write(dir.path(), "frf.csv", &t);
     let l = write(dir.path(), "l.toml", "# the user's file\n");
     let d = dir.path().join("DIR");
@@ -466,7 +471,7 @@ fn huge_sizes_are_refused_before_allocating() {
     );
     let e = rig(&["--steps", "3", "--samples-per-cycle", "1000000000"]);
     assert!(
-        e.contains("--samples-per-cycle") && e.contains("100000"),
+        e.contains("samples per cycle") && e.contains("100000"),
         "{e}"
     );
     let e = fails(
@@ -531,4 +536,279 @@ fn huge_sizes_are_refused_before_allocating() {
         let h = ok(&cmd);
         assert!(h.contains(want), "{cmd:?} --help does not state {want}");
     }
+}
+
+/// Minimal MAT v5 file (little-endian, real double arrays).
+fn mat_v5(vars: &[(&str, &[f64])], compress: bool) -> Vec<u8> {
+    let mut out = vec![b' '; 116];
+    out[..20].copy_from_slice(b"MATLAB 5.0 MAT-file,");
+    out.extend([0u8; 8]);
+    out.extend(0x0100u16.to_le_bytes());
+    out.extend(*b"IM");
+    let pad = |v: &mut Vec<u8>| {
+        while v.len() % 8 != 0 {
+            v.push(0);
+        }
+    };
+    for (name, data) in vars {
+        let mut p = Vec::new();
+        for v in [6u32, 8, 6, 0, 5, 8] {
+            p.extend(v.to_le_bytes());
+        }
+        p.extend((data.len() as i32).to_le_bytes());
+        p.extend(1i32.to_le_bytes());
+        p.extend(1u32.to_le_bytes());
+        p.extend((name.len() as u32).to_le_bytes());
+        p.extend(name.as_bytes());
+        pad(&mut p);
+        p.extend(9u32.to_le_bytes());
+        p.extend(((8 * data.len()) as u32).to_le_bytes());
+        for v in data.iter() {
+            p.extend(v.to_le_bytes());
+        }
+        pad(&mut p);
+        let mut el = Vec::new();
+        el.extend(14u32.to_le_bytes());
+        el.extend((p.len() as u32).to_le_bytes());
+        el.extend(p);
+        if compress {
+            use std::io::Write;
+            let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+            z.write_all(&el).unwrap();
+            let c = z.finish().unwrap();
+            out.extend(15u32.to_le_bytes());
+            out.extend((c.len() as u32).to_le_bytes());
+            out.extend(c);
+        } else {
+            out.extend(el);
+        }
+    }
+    out
+}
+
+#[test]
+fn mat_bomb_is_refused_within_bounded_memory() {
+    // ~0.3 MB of zlib that inflates to 300 MB (> the 256 MiB bound).
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    let zeros = vec![0u8; 1 << 20];
+    for _ in 0..300 {
+        z.write_all(&zeros).unwrap();
+    }
+    let c = z.finish().unwrap();
+    let mut f = mat_v5(&[], false);
+    f.extend(15u32.to_le_bytes());
+    f.extend((c.len() as u32).to_le_bytes());
+    f.extend(c);
+    let mat = dir.path().join("bomb.mat");
+    std::fs::write(&mat, f).unwrap();
+    let o = dir.path().join("o.csv");
+    let e = fails(
+        &[
+            "simulate",
+            "--model",
+            s(&example("duffing-strong.toml")),
+            "--input",
+            s(&mat),
+            "--fs",
+            "100",
+            "--out",
+            s(&o),
+        ],
+        "inflates to more than",
+        &o,
+    );
+    assert!(e.contains("268435456"), "{e}");
+}
+
+// ---------------------------------------------------------- 7. input formats
+
+#[test]
+fn byte_order_mark_is_accepted_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let bom = |name: &str, text: &str| write(dir.path(), name, &format!("\u{feff}{text}"));
+    // fit data
+    let data = fit_data(dir.path());
+    let text = std::fs::read_to_string(&data).unwrap();
+    let with = bom("bom.csv", &text);
+    let a = ok(&[
+        "fit",
+        s(&data),
+        "--model",
+        "duffing",
+        "--starts",
+        "2",
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    let b = ok(&[
+        "fit",
+        s(&with),
+        "--model",
+        "duffing",
+        "--starts",
+        "2",
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    let strip = |t: &str| {
+        let mut v: serde_json::Value = serde_json::from_str(t).unwrap();
+        v.as_object_mut()
+            .unwrap()
+            .retain(|k, _| !k.contains("time") && !k.ends_with("_s") && k != "data");
+        v["parameters"].clone()
+    };
+    assert_eq!(strip(&a), strip(&b));
+    // phase-resonance points
+    let pr = std::fs::read_to_string(example("har-wing-table8.csv")).unwrap();
+    let prb = bom("pr.csv", &pr);
+    ok(&[
+        "fit",
+        s(&prb),
+        "--phase-resonance",
+        "--peak-to-peak",
+        "--model",
+        "duffing",
+        "--starts",
+        "2",
+    ]);
+    // linear-id FRF: the BOM must not leak into the column names
+    let plain = write(dir.path(), "plain.csv", &sdof_frf_text());
+    let frf = bom("frf.csv", &sdof_frf_text());
+    let a = ok(&["linear-id", s(&plain), "--json"]);
+    let b = ok(&["linear-id", s(&frf), "--json"]);
+    let keep = |t: &str| {
+        let v: serde_json::Value = serde_json::from_str(t).unwrap();
+        (v["sdof"]["alpha"].clone(), v["sdof"]["delta"].clone())
+    };
+    assert!(!b.contains('\u{feff}'), "{b}");
+    assert!(keep(&a).0.as_f64().is_some());
+    assert_eq!(keep(&a), keep(&b));
+    // model TOML
+    let model = std::fs::read_to_string(example("duffing-strong.toml")).unwrap();
+    let mb = bom("m.toml", &model);
+    ok(&["roots", "--model", s(&mb), "--gamma", "1", "--f-hz", "10"]);
+    // signal CSV
+    let sig = bom("sig.csv", "t,accel\n0,0\n0.01,1\n0.02,0\n0.03,-1\n0.04,0\n");
+    let o = dir.path().join("sim.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        s(&example("duffing-strong.toml")),
+        "--input",
+        s(&sig),
+        "--out",
+        s(&o),
+    ]);
+}
+
+#[test]
+fn mat_truncated_v73_and_v4_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("o.csv");
+    let x: Vec<f64> = (0..200).map(|k| (k as f64 * 0.1).sin()).collect();
+    let sim = |mat: &Path, want: &str| {
+        fails(
+            &[
+                "simulate",
+                "--model",
+                s(&example("duffing-strong.toml")),
+                "--input",
+                s(mat),
+                "--fs",
+                "100",
+                "--out",
+                s(&o),
+            ],
+            want,
+            &o,
+        )
+    };
+    for compress in [false, true] {
+        let full = mat_v5(&[("accel", &x)], compress);
+        let p = dir.path().join("cut.mat");
+        std::fs::write(&p, &full[..full.len() - 40]).unwrap();
+        sim(&p, "truncated or corrupt");
+        std::fs::write(&p, &full[..full.len() / 2]).unwrap();
+        sim(&p, "truncated or corrupt");
+        std::fs::write(&p, &full).unwrap();
+        ok(&[
+            "simulate",
+            "--model",
+            s(&example("duffing-strong.toml")),
+            "--input",
+            s(&p),
+            "--fs",
+            "100",
+            "--out",
+            s(&o),
+        ]);
+        std::fs::remove_file(&o).unwrap();
+    }
+    let mut h5 = vec![b' '; 512];
+    h5[..19].copy_from_slice(b"MATLAB 7.3 MAT-file");
+    h5.extend(b"\x89HDF\r\n\x1a\n");
+    h5.extend([0u8; 64]);
+    let p = write(dir.path(), "v73.mat", "");
+    std::fs::write(&p, h5).unwrap();
+    let e = sim(&p, "MAT v7.3 (HDF5)");
+    assert!(e.contains("-v7"), "{e}");
+    let mut v4 = Vec::new();
+    for v in [0u32, 200, 1, 0, 6] {
+        v4.extend(v.to_le_bytes());
+    }
+    v4.extend(b"accel\0");
+    for v in &x {
+        v4.extend(v.to_le_bytes());
+    }
+    let p = dir.path().join("v4.mat");
+    std::fs::write(&p, v4).unwrap();
+    let e = sim(&p, "MAT v4");
+    assert!(e.contains("-v7"), "{e}");
+}
+
+// ------------------------------------------------ 9. silently accepted options
+
+#[test]
+fn data_rows_with_extra_fields_are_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = fit_data(dir.path());
+    let mut text = std::fs::read_to_string(&data).unwrap();
+    text = text.replacen(",up\n", ",up,7\n", 1);
+    let bad = write(dir.path(), "bad.csv", &text);
+    let e = fails_one_line(&["fit", s(&bad), "--model", "duffing", "--starts", "2"]);
+    assert!(e.contains("line 2") && e.contains("7 fields"), "{e}");
+    let pr = std::fs::read_to_string(example("har-wing-table8.csv")).unwrap();
+    let mut lines: Vec<String> = pr.lines().map(String::from).collect();
+    let k = lines
+        .iter()
+        .position(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .unwrap();
+    lines[k].push_str(",1");
+    let bad = write(dir.path(), "pr.csv", &(lines.join("\n") + "\n"));
+    let e = fails_one_line(&[
+        "fit",
+        s(&bad),
+        "--phase-resonance",
+        "--model",
+        "duffing",
+        "--starts",
+        "2",
+    ]);
+    assert!(e.contains("fields"), "{e}");
+}
+
+#[test]
+fn linear_id_max_iterations_zero_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = write(
+        dir.path(),
+        "frf.csv",
+        "f_hz,mag\n9,0.001\n9.5,0.002\n10,0.01\n10.5,0.002\n11,0.001\n",
+    );
+    let e = fails_one_line(&["linear-id", s(&frf), "--max-iterations", "0"]);
+    assert!(e.contains("--max-iterations 0"), "{e}");
 }

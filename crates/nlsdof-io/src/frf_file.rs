@@ -99,6 +99,7 @@ pub fn read_frf_csv(path: &Path) -> Result<FrfTable, FrfFileError> {
         path: path.into(),
         source,
     })?;
+    let text = crate::strip_bom(&text);
     let mut header: Option<Vec<String>> = None;
     let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
@@ -305,6 +306,7 @@ pub fn read_time_history(path: &Path, fs: Option<f64>) -> Result<TimeHistory, Fr
         path: path.into(),
         source,
     })?;
+    let text = crate::strip_bom(&text);
     if text.starts_with("Source File Name") {
         return read_polytec_time(path, &text, fs);
     }

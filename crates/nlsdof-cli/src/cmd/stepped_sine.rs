@@ -131,13 +131,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
             nlsdof::stepped_sine::MAX_STEPS
         )));
     }
-    if !(16..=nlsdof::stepped_sine::MAX_SAMPLES_PER_CYCLE).contains(&a.samples_per_cycle) {
-        return Err(CliError::Usage(format!(
-            "--samples-per-cycle {}: need 16 to {}",
-            a.samples_per_cycle,
-            nlsdof::stepped_sine::MAX_SAMPLES_PER_CYCLE
-        )));
-    }
     if a.history_decimate == 0 {
         return Err(CliError::Usage(
             "--history-decimate 0 is not allowed: give N >= 1".into(),

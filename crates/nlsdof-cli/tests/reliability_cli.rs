@@ -812,3 +812,118 @@ fn linear_id_max_iterations_zero_is_rejected() {
     let e = fails_one_line(&["linear-id", s(&frf), "--max-iterations", "0"]);
     assert!(e.contains("--max-iterations 0"), "{e}");
 }
+
+// ------------------------------------------------------------ 6. wrong answers
+
+#[test]
+fn huge_stiffness_coefficient_root_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = write(
+        dir.path(),
+        "kr.toml",
+        "mass = 1\nstiffness = 3947.84\ndamping = 1.2566\n[nonlinear_stiffness]\ncoefficient = 1e300\nexponent = 2\n",
+    );
+    let v = common::json(&[
+        "roots",
+        "--model",
+        s(&m),
+        "--gamma",
+        "1",
+        "--f-hz",
+        "10",
+        "--json",
+    ]);
+    let a = v["roots"][0]["amplitude"].as_f64().unwrap();
+    assert!((a / 1.1006424163e-100 - 1.0).abs() < 1e-10, "{v}");
+}
+
+#[test]
+fn undamped_resonance_is_no_finite_state_not_sticking() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = write(
+        dir.path(),
+        "und.toml",
+        "mass = 1\nstiffness = 3947.8417604357433\ndamping = 0\n",
+    );
+    let v = common::json(&[
+        "frf",
+        "--model",
+        s(&m),
+        "--gamma",
+        "1",
+        "--f-min",
+        "9",
+        "--f-max",
+        "11",
+        "--steps",
+        "3",
+        "--json",
+    ]);
+    let p = &v["levels"][0]["points"][1];
+    assert_eq!(p["sticking"], false, "{p}");
+    assert_eq!(p["unbounded"], true, "{p}");
+    assert!(p["amplitude"].is_null(), "{p}");
+    let v = common::json(&[
+        "roots",
+        "--model",
+        s(&m),
+        "--gamma",
+        "1",
+        "--f-hz",
+        "10",
+        "--json",
+    ]);
+    assert_eq!(v["no_motion"], "unbounded", "{v}");
+    // Coulomb friction that holds the mass is still sticking.
+    let v = common::json(&[
+        "frf",
+        "--model",
+        s(&example("coulomb.toml")),
+        "--gamma",
+        "1",
+        "--f-min",
+        "4",
+        "--f-max",
+        "6",
+        "--steps",
+        "3",
+        "--json",
+    ]);
+    let p = &v["levels"][0]["points"][0];
+    assert_eq!(p["sticking"], true, "{p}");
+    assert_eq!(p["unbounded"], false, "{p}");
+}
+
+#[test]
+fn frf_estimate_all_zero_input_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut t = String::from("t,force,vel\n");
+    for k in 0..8192 {
+        let tk = k as f64 / 1000.0;
+        t += &format!(
+            "{tk},0,{}\n",
+            (2.0 * std::f64::consts::PI * 37.0 * tk).sin()
+        );
+    }
+    let th = write(dir.path(), "th.csv", &t);
+    let o = dir.path().join("h.csv");
+    for method in ["h1", "h2", "ratio"] {
+        fails(
+            &[
+                "frf-estimate",
+                "--input",
+                s(&th),
+                "--input-channel",
+                "force",
+                "--output-channel",
+                "vel",
+                "--method",
+                method,
+                "--out",
+                s(&o),
+            ],
+            "no power",
+            &o,
+        );
+    }
+}

@@ -245,12 +245,15 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
                 .points
                 .iter()
                 .map(|p| {
+                    // no finite steady state: no amplitude, no phase
+                    let num = |v: f64| (!p.unbounded).then_some(v);
                     json!({
                         "f_hz": hz(p.omega),
-                        "amplitude": p.amplitude,
-                        "phase_deg": p.phase.to_degrees(),
+                        "amplitude": num(p.amplitude),
+                        "phase_deg": num(p.phase.to_degrees()),
                         "stable": p.stable,
                         "sticking": p.sticking,
+                        "unbounded": p.unbounded,
                     })
                 })
                 .collect();
@@ -293,7 +296,8 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
 /// CSV rows; the first five columns are the contract, `sweep` matches the
 /// stepped-sine data format read by the fitting commands, `stable` and
 /// `sticking` flag each point. A sticking point (no steady motion) has
-/// amplitude 0 and an empty phase (there is no phase to report).
+/// amplitude 0 and an empty phase (there is no phase to report); a point
+/// without a finite steady state (undamped resonance) has both empty.
 fn csv_output(levels: &[Level]) -> String {
     let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking\n");
     for (i, l) in levels.iter().enumerate() {
@@ -302,10 +306,15 @@ fn csv_output(levels: &[Level]) -> String {
             nlsdof::SweepDirection::Down => "down",
         };
         for p in &l.sweep.points {
-            let phase = if p.sticking {
+            let phase = if p.sticking || p.unbounded {
                 String::new()
             } else {
                 format!("{}", p.phase.to_degrees())
+            };
+            let amplitude = if p.unbounded {
+                String::new()
+            } else {
+                format!("{}", p.amplitude)
             };
             let _ = writeln!(
                 s,
@@ -313,7 +322,7 @@ fn csv_output(levels: &[Level]) -> String {
                 i + 1,
                 l.gamma,
                 hz(p.omega),
-                p.amplitude,
+                amplitude,
                 phase,
                 sweep,
                 p.stable,
@@ -365,7 +374,7 @@ fn text_output(
             .sweep
             .points
             .iter()
-            .filter(|p| !p.sticking)
+            .filter(|p| !p.sticking && !p.unbounded)
             .max_by(|a, b| a.amplitude.total_cmp(&b.amplitude));
         match peak {
             Some(p) => {
@@ -399,11 +408,20 @@ fn text_output(
                 l.sweep.points.len()
             );
         }
+        let unbounded = l.sweep.points.iter().filter(|p| p.unbounded).count();
+        if let Some(first) = l.sweep.points.iter().find(|p| p.unbounded) {
+            let _ = writeln!(
+                s,
+                "  no finite state    at {unbounded} of {} steps (first {:.6} Hz): the response grows without bound (no damping at resonance)",
+                l.sweep.points.len(),
+                hz(first.omega)
+            );
+        }
         let unstable = l
             .sweep
             .points
             .iter()
-            .filter(|p| !p.sticking && !p.stable)
+            .filter(|p| !p.sticking && !p.unbounded && !p.stable)
             .count();
         if unstable > 0 {
             let _ = writeln!(

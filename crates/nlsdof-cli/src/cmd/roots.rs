@@ -229,6 +229,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 out["input_force_n"] = json!(input_accel * model.mass);
             }
             Some(NoMotion::NoRoot) => out["no_motion"] = json!("no_root"),
+            Some(NoMotion::Unbounded) => out["no_motion"] = json!("unbounded"),
         }
         println!("{out}");
         return Ok(());
@@ -254,6 +255,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         Some(NoMotion::NoRoot) => {
             println!("no steady motion: the harmonic-balance equation has no positive root");
+        }
+        Some(NoMotion::Unbounded) => {
+            println!("no finite steady state: nothing balances the input at any amplitude, so the response grows without bound (no damping at resonance)");
         }
         None => {
             let n = set.roots.len();

@@ -14,6 +14,7 @@
 //!   at 90° phase per level) for `nlsdof fit --phase-resonance`.
 
 pub mod atomic;
+pub mod bounds_file;
 pub mod error;
 pub mod frf_file;
 pub mod mat5;

@@ -214,13 +214,23 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
         path: path.into(),
         source,
     })?;
+    parse_csv(std::io::BufReader::with_capacity(1 << 20, file), path, fs)
+}
+
+/// Parses a CSV signal from `reader` (`path` only names it in errors).
+pub fn parse_csv<R: std::io::Read>(
+    reader: R,
+    path: &Path,
+    fs: Option<f64>,
+) -> Result<Signal, SignalFileError> {
+    check_fs(path, fs)?;
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .buffer_capacity(1 << 20)
-        .from_reader(std::io::BufReader::with_capacity(1 << 20, file));
+        .from_reader(reader);
     let mut rec = csv::ByteRecord::new();
     let csv_err = |e: csv::Error| match e.into_kind() {
         csv::ErrorKind::Io(source) => SignalFileError::Read {
@@ -372,6 +382,30 @@ pub fn read_mat(
             path: path.into(),
             source,
         })?;
+    mat_signal(arrays, path, fs, var)
+}
+
+/// Parses a MAT v5 signal held in `bytes` (`path` only names it in errors).
+pub fn parse_mat(
+    bytes: &[u8],
+    path: &Path,
+    fs: Option<f64>,
+    var: Option<&str>,
+) -> Result<Signal, SignalFileError> {
+    check_fs(path, fs)?;
+    let arrays = crate::mat5::parse(bytes).map_err(|source| SignalFileError::Mat {
+        path: path.into(),
+        source,
+    })?;
+    mat_signal(arrays, path, fs, var)
+}
+
+fn mat_signal(
+    arrays: Vec<crate::mat5::MatArray>,
+    path: &Path,
+    fs: Option<f64>,
+    var: Option<&str>,
+) -> Result<Signal, SignalFileError> {
     let find = |name: &str| arrays.iter().find(|a| a.name == name);
     let real = |a: &crate::mat5::MatArray| (!a.complex).then(|| a.real.clone());
     let content = |message: String| SignalFileError::MatContent {

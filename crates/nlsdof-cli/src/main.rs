@@ -143,6 +143,13 @@ fn main() {
     if !matches!(cli.command, Command::Demo(_)) {
         nlsdof_io::atomic::defer_commits();
     }
+    // `fit --plot` writes SVG (checked here: cmd/fit.rs is being rewritten).
+    if let Command::Fit(a) = &cli.command {
+        if let Err(e) = plot::check_svg_name(a.plot.as_deref()) {
+            eprintln!("nlsdof: error: {e}");
+            std::process::exit(2);
+        }
+    }
     let result: Result<(), CliError> = match cli.command {
         Command::Equiv(a) => cmd::equiv::run(a),
         Command::Roots(a) => cmd::roots::run(a),

@@ -927,3 +927,60 @@ fn frf_estimate_all_zero_input_is_an_error() {
         );
     }
 }
+
+#[test]
+fn frequency_weight_without_phase_resonance_is_rejected() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = fit_data(dir.path());
+    for w in ["NaN", "2"] {
+        let e = fails_one_line(&[
+            "fit",
+            s(&data),
+            "--model",
+            "duffing",
+            "--starts",
+            "2",
+            "--frequency-weight",
+            w,
+        ]);
+        assert!(e.contains("--phase-resonance"), "{e}");
+    }
+    let e = fails_one_line(&[
+        "fit",
+        s(&example("har-wing-table8.csv")),
+        "--phase-resonance",
+        "--peak-to-peak",
+        "--model",
+        "duffing",
+        "--frequency-weight",
+        "NaN",
+    ]);
+    assert!(e.contains("--frequency-weight NaN"), "{e}");
+}
+
+#[test]
+fn svg_plot_under_a_png_name_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("p.png");
+    let mut a = frf_args(&example("duffing-strong.toml"));
+    a.extend(["--plot".into(), s(&png).into()]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    fails(&a, ".svg", &png);
+    let data = fit_data(dir.path());
+    fails(
+        &[
+            "fit",
+            s(&data),
+            "--model",
+            "duffing",
+            "--starts",
+            "2",
+            "--plot",
+            s(&png),
+        ],
+        ".svg",
+        &png,
+    );
+    let frf = write(dir.path(), "frf.csv", &sdof_frf_text());
+    fails(&["linear-id", s(&frf), "--plot", s(&png)], ".svg", &png);
+}

@@ -161,6 +161,7 @@ fn hz(omega: f64) -> f64 {
 pub fn run(args: Args) -> Result<(), CliError> {
     // All checks first, all computation in memory; files are written last
     // and atomically, so an error never leaves a file behind.
+    plot::check_svg_name(args.plot.as_deref())?;
     let gammas = parse_gammas(&args.gamma)?;
     let f_min = check_frequency("--f-min", args.f_min)?;
     let f_max = check_frequency("--f-max", args.f_max)?;

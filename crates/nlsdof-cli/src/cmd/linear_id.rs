@@ -149,6 +149,7 @@ struct Identified {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    crate::plot::check_svg_name(args.plot.as_deref())?;
     if args.max_iterations == 0 || args.max_iterations > 10_000 {
         return Err(usage(format!(
             "--max-iterations {}: need 1 to 10000 vector-fitting iterations",

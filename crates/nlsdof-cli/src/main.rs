@@ -134,7 +134,10 @@ fn main() {
             }
             msg.push_str(p);
         }
-        eprintln!("nlsdof: error: {msg} (see --help)");
+        eprintln!(
+            "nlsdof: error: {} (see --help)",
+            error::compact_numbers(&msg)
+        );
         std::process::exit(2);
     });
     // All output files of a command are committed together at the end, after
@@ -172,7 +175,7 @@ fn main() {
     });
     if let Err(e) = result {
         nlsdof_io::atomic::cleanup_all();
-        eprintln!("nlsdof: error: {e}");
+        eprintln!("nlsdof: error: {}", error::compact_numbers(&e.to_string()));
         std::process::exit(2);
     }
 }

@@ -984,3 +984,70 @@ fn svg_plot_under_a_png_name_is_refused() {
     let frf = write(dir.path(), "frf.csv", &sdof_frf_text());
     fails(&["linear-id", s(&frf), "--plot", s(&png)], ".svg", &png);
 }
+
+// ------------------------------------------------------ 8. numbers in text
+
+#[test]
+fn extreme_numbers_print_in_significant_digits() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = example("duffing-strong.toml");
+    let long = |t: &str| {
+        t.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .map(str::len)
+            .max()
+            .unwrap_or(0)
+    };
+    let e = fails_one_line(&[
+        "roots",
+        "--model",
+        s(&model),
+        "--gamma",
+        "1e308",
+        "--f-hz",
+        "12.5",
+    ]);
+    assert!(long(&e) <= 17, "{e}");
+    let e = fails_one_line(&[
+        "roots",
+        "--model",
+        s(&model),
+        "--gamma",
+        "-1e308",
+        "--f-hz",
+        "12.5",
+    ]);
+    assert!(e.contains("-1e308") && long(&e) <= 17, "{e}");
+    let o = dir.path().join("x.csv");
+    let e = fails(
+        &[
+            "stepped-sine",
+            "--model",
+            s(&model),
+            "--gamma",
+            "1",
+            "--f-min",
+            "-1e300",
+            "--f-max",
+            "1",
+            "--steps",
+            "3",
+            "--out",
+            s(&o),
+        ],
+        "-1e300",
+        &o,
+    );
+    assert!(long(&e) <= 17, "{e}");
+    // text output of a valid extreme level
+    let t = ok(&[
+        "roots",
+        "--model",
+        s(&model),
+        "--gamma",
+        "1e-300",
+        "--f-hz",
+        "12.5",
+    ]);
+    assert!(t.contains("gamma = 1e-300"), "{t}");
+    assert!(long(&t) <= 17, "{t}");
+}

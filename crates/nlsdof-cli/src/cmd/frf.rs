@@ -205,7 +205,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else if args.csv {
         csv_output(&levels)
     } else {
-        text_output(&args, &model, &levels, f_min, f_max)
+        crate::error::compact_numbers(&text_output(&args, &model, &levels, f_min, f_max))
     };
 
     if let Some(path) = &args.plot {

@@ -192,7 +192,7 @@ EXAMPLE:
 /// Six significant digits, without trailing zeros.
 fn round6(v: f64) -> String {
     let s = format!("{v:.5e}");
-    s.parse::<f64>().map(|x| x.to_string()).unwrap_or(s)
+    s.parse::<f64>().map(crate::error::num).unwrap_or(s)
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -237,7 +237,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
     println!("model {}: {}", args.model.display(), model_summary(&model));
     println!(
-        "gamma = {gamma} m/s^2 zero-to-peak, f = {f_hz} Hz, formulation: {} ({})",
+        "gamma = {} m/s^2 zero-to-peak, f = {} Hz, formulation: {} ({})",
+        crate::error::num(gamma),
+        crate::error::num(f_hz),
         args.formulation.name(),
         args.formulation.description()
     );

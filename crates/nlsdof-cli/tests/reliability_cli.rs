@@ -1051,3 +1051,119 @@ fn extreme_numbers_print_in_significant_digits() {
     assert!(t.contains("gamma = 1e-300"), "{t}");
     assert!(long(&t) <= 17, "{t}");
 }
+
+// ------------------------------------------------- 10. silent simulation error
+
+/// Linear oscillator (f_n = 10 Hz, zeta = 2 %) driven at resonance by a
+/// sine sampled at `spc` samples per cycle, from rest: returns the largest
+/// error of the simulated x against the closed form, relative to max |x|,
+/// and the JSON summary and stderr of `nlsdof simulate`.
+fn sine_run(spc: f64, extra: &[&str]) -> (f64, serde_json::Value, String) {
+    use std::f64::consts::PI;
+    let dir = tempfile::tempdir().unwrap();
+    let wn = 2.0 * PI * 10.0;
+    let z = 0.02;
+    let m = write(
+        dir.path(),
+        "lin.toml",
+        &format!(
+            "mass = 1\nstiffness = {:?}\ndamping = {:?}\n",
+            wn * wn,
+            2.0 * z * wn
+        ),
+    );
+    let fs = 10.0 * spc;
+    let n = (5.0 * fs) as usize + 1;
+    let mut t = String::from("t,accel\n");
+    for k in 0..n {
+        let tk = k as f64 / fs;
+        t += &format!("{tk:?},{:?}\n", (wn * tk).sin());
+    }
+    let inp = write(dir.path(), "in.csv", &t);
+    let o = dir.path().join("r.csv");
+    let mut a = vec![
+        "simulate",
+        "--model",
+        s(&m),
+        "--input",
+        s(&inp),
+        "--out",
+        s(&o),
+        "--json",
+    ];
+    a.extend_from_slice(extra);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+        .args(&a)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // closed form: x = Im(H e^{i w t}) + e^{-z wn t}(c1 cos wd t + c2 sin wd t)
+    let (hr, hi) = {
+        let (re, im) = (wn * wn - wn * wn, 2.0 * z * wn * wn);
+        let d = re * re + im * im;
+        (re / d, -im / d)
+    };
+    let wd = wn * (1.0 - z * z).sqrt();
+    let xp0 = hi;
+    let vp0 = wn * hr;
+    let c1 = -xp0;
+    let c2 = (-vp0 + z * wn * c1) / wd;
+    let text = std::fs::read_to_string(&o).unwrap();
+    let (mut err, mut mx) = (0.0f64, 0.0f64);
+    for line in text.lines().skip(1) {
+        let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let tk = f[0];
+        let xe = hr * (wn * tk).sin()
+            + hi * (wn * tk).cos()
+            + (-z * wn * tk).exp() * (c1 * (wd * tk).cos() + c2 * (wd * tk).sin());
+        err = err.max((f[2] - xe).abs());
+        mx = mx.max(xe.abs());
+    }
+    (
+        err / mx,
+        v,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn default_integration_is_within_1e_3_at_20_samples_per_cycle() {
+    for spc in [20.0, 36.0] {
+        let (err, v, stderr) = sine_run(spc, &[]);
+        assert!(err < 1e-3, "{spc} samples/cycle: error {err:e}");
+        let est = v["integration_error"]["estimate"].as_f64().unwrap();
+        assert!(
+            est < 1e-3 && v["integration_error"]["warning"] == false,
+            "{v}"
+        );
+        assert!(stderr.is_empty(), "{stderr}");
+    }
+}
+
+#[test]
+fn large_integration_error_is_estimated_and_warned() {
+    // two samples per RK4 step at 36 samples per cycle: ~6e-3 off
+    for extra in [
+        &["--samples-per-step", "2"][..],
+        &["--samples-per-step", "1"][..],
+    ] {
+        let (err, v, stderr) = sine_run(36.0, extra);
+        let est = v["integration_error"]["estimate"].as_f64().unwrap();
+        assert!(err > 1e-3, "{extra:?}: {err:e}");
+        assert!(
+            est > 0.5 * err && est < 2.0 * err,
+            "{extra:?}: estimate {est:e} vs {err:e}"
+        );
+        assert_eq!(v["integration_error"]["warning"], true);
+        assert!(
+            stderr.starts_with("nlsdof: warning: estimated integration error")
+                && stderr.contains("sample the input faster"),
+            "{stderr}"
+        );
+    }
+}

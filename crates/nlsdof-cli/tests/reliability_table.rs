@@ -277,10 +277,7 @@ fn outcome(c: &Class, d: &Path) -> String {
         .replace("{ex}", ex.to_str().unwrap());
     let args: Vec<&str> = line.split_whitespace().collect();
     let before = listing(d);
-    // NLSDOF_BIN runs the classes against another build (e.g. main's, to see
-    // which classes failed before issue 11); the doc check then fails.
-    let bin = std::env::var("NLSDOF_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_nlsdof").into());
-    let mut cmd = Command::new(bin);
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_nlsdof"));
     cmd.args(&args).current_dir(d).stderr(Stdio::piped());
     let (code, stdout, stderr) = match c.out {
         Out::Captured => {

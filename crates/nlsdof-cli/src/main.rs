@@ -9,6 +9,7 @@ mod png;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
+use std::io::Write;
 
 /// Nonlinear SDoF power-law models: m x'' + c x' + k x + c_e x'|x'|^eta + k_r x|x|^rho = m gamma(t).
 ///
@@ -56,8 +57,54 @@ enum Command {
     Demo(cmd::demo::Args),
 }
 
+/// Standard output failed: a closed pipe ends quietly as Unix tools do (exit
+/// 141, what a shell reports for SIGPIPE), any other error is one line and
+/// exit 2. No output file is committed in either case.
+fn stdout_failed(e: &std::io::Error) -> ! {
+    nlsdof_io::atomic::cleanup_all();
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(141);
+    }
+    let _ = writeln!(
+        std::io::stderr(),
+        "nlsdof: error: cannot write to standard output: {e}; no output file written"
+    );
+    std::process::exit(2);
+}
+
+/// `print!` panics when standard output fails (closed pipe, full disk):
+/// turn that into [`stdout_failed`]; any other panic removes the temporary
+/// files before the default report.
+fn install_panic_hook() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if let Some(rest) = msg.strip_prefix("failed printing to stdout: ") {
+            let kind = if rest.contains("Broken pipe") || rest.contains("os error 32") {
+                std::io::ErrorKind::BrokenPipe
+            } else {
+                std::io::ErrorKind::Other
+            };
+            stdout_failed(&std::io::Error::new(kind, rest.to_string()));
+        }
+        if msg.starts_with("failed printing to stderr") {
+            nlsdof_io::atomic::cleanup_all();
+            std::process::exit(2);
+        }
+        nlsdof_io::atomic::cleanup_all();
+        default(info);
+    }));
+}
+
 fn main() {
     fonts::register();
+    install_panic_hook();
+    // SIGINT, SIGTERM and SIGHUP (ctrlc "termination" feature).
     ctrlc::set_handler(|| {
         nlsdof_io::atomic::cleanup_all();
         eprintln!("nlsdof: interrupted; no output written");
@@ -90,9 +137,25 @@ fn main() {
             }
             msg.push_str(p);
         }
-        eprintln!("nlsdof: error: {msg} (see --help)");
+        eprintln!(
+            "nlsdof: error: {} (see --help)",
+            error::compact_numbers(&msg)
+        );
         std::process::exit(2);
     });
+    // All output files of a command are committed together at the end, after
+    // standard output is flushed (all or nothing). `demo` stages its own
+    // folder and renames it.
+    if !matches!(cli.command, Command::Demo(_)) {
+        nlsdof_io::atomic::defer_commits();
+    }
+    // `fit --plot` writes SVG (checked here: cmd/fit.rs is being rewritten).
+    if let Command::Fit(a) = &cli.command {
+        if let Err(e) = plot::check_svg_name(a.plot.as_deref()) {
+            eprintln!("nlsdof: error: {e}");
+            std::process::exit(2);
+        }
+    }
     let result: Result<(), CliError> = match cli.command {
         Command::Equiv(a) => cmd::equiv::run(a),
         Command::Roots(a) => cmd::roots::run(a),
@@ -108,8 +171,15 @@ fn main() {
         Command::Spectrogram(a) => cmd::spectrogram::run(a),
         Command::Demo(a) => cmd::demo::run(a),
     };
+    let result = result.and_then(|()| {
+        if let Err(e) = std::io::stdout().flush() {
+            stdout_failed(&e);
+        }
+        nlsdof_io::atomic::commit_deferred().map_err(CliError::from)
+    });
     if let Err(e) = result {
-        eprintln!("nlsdof: error: {e}");
+        nlsdof_io::atomic::cleanup_all();
+        eprintln!("nlsdof: error: {}", error::compact_numbers(&e.to_string()));
         std::process::exit(2);
     }
 }

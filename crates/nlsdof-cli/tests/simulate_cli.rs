@@ -144,7 +144,10 @@ fn simulate_options_and_json() {
     assert_eq!(v["samples"], 2001);
     assert_eq!(v["outputs"], 201);
     assert_eq!(v["method"], "rk4");
-    assert_eq!(v["samples_per_step"], 2);
+    // issue 11: default on uniform sampling is RK4 with h = 1/(2 fs) and
+    // cubic input between the samples (two steps per sample)
+    assert_eq!(v["samples_per_step"], 0.5);
+    assert_eq!(v["input_interpolation"], "cubic");
     assert_eq!(v["sampling"]["fs_hz"], 200.0);
     let (_, rows) = read_csv(&out);
     assert_eq!(rows.len(), 201);

@@ -1,25 +1,50 @@
 //! Atomic output files: content goes to a hidden temporary file next to the
 //! target and is renamed over it only by [`AtomicFile::commit`]. Dropping an
-//! uncommitted `AtomicFile` (error, panic) removes the temporary, so no
-//! partial output is ever visible under the target name.
+//! uncommitted `AtomicFile` (error, panic) removes the temporary, and so does
+//! a failed commit (flush or rename), so no partial output is ever visible
+//! under the target name and no temporary is left behind.
+//!
+//! Targets that are not regular files are never replaced: a character
+//! device (`/dev/null`, `/dev/full`, a terminal) is written through, so a
+//! full device reports its error; a FIFO, socket or block device is refused;
+//! a directory is refused up front. A symbolic link is followed: its target
+//! is replaced, the link stays.
+//!
+//! With [`defer_commits`] (the CLI turns it on for every command that writes
+//! files) a commit only flushes and syncs the temporary; the renames all
+//! happen in [`commit_deferred`], once the command has succeeded, so a
+//! command with several outputs writes all or nothing. Two outputs with the
+//! same target in one run are refused.
 //!
 //! Every live temporary is remembered, and [`cleanup_all`] (called from the
-//! Ctrl-C handler) removes them. A whole output folder built as a hidden
-//! staging folder and renamed when complete (`nlsdof demo`) is registered
-//! with [`register_partial_dir`] so that Ctrl-C removes it too.
+//! Ctrl-C / SIGTERM / SIGHUP handler and on every error exit) removes them. A
+//! whole output folder built as a hidden staging folder and renamed when
+//! complete (`nlsdof demo`) is registered with [`register_partial_dir`] so
+//! that the cleanup removes it too.
 
 use crate::error::IoError;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
+/// Temporaries not yet renamed (written, or committed but deferred).
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Targets of this run's outputs (normalised), to refuse a second output
+/// to the same file.
+static TARGETS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 static LIVE_DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+static DEFER: AtomicBool = AtomicBool::new(false);
+/// Deferred renames: (temporary, target).
+static PENDING: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
 
 /// Removes every temporary file and staging folder still registered (for a
-/// Ctrl-C handler).
+/// signal handler or an error exit). Deferred commits are dropped.
 pub fn cleanup_all() {
+    if let Ok(mut p) = PENDING.lock() {
+        p.clear();
+    }
     if let Ok(live) = LIVE.lock() {
         for p in live.iter() {
             let _ = std::fs::remove_file(p);
@@ -32,6 +57,38 @@ pub fn cleanup_all() {
     }
 }
 
+/// From now on [`AtomicFile::commit`] only finishes the temporary; the
+/// renames happen in [`commit_deferred`] (all outputs of a run, or none).
+pub fn defer_commits() {
+    DEFER.store(true, Ordering::SeqCst);
+}
+
+/// Renames every deferred temporary over its target, in the order they
+/// were committed. On a failure the remaining temporaries are removed and
+/// the error is returned (the targets renamed before it stay).
+pub fn commit_deferred() -> Result<(), IoError> {
+    let pending = PENDING
+        .lock()
+        .map(|mut p| std::mem::take(&mut *p))
+        .unwrap_or_default();
+    let mut result = Ok(());
+    for (tmp, target) in pending {
+        if result.is_ok() {
+            if let Err(source) = std::fs::rename(&tmp, &target) {
+                result = Err(IoError::Write {
+                    path: target.clone(),
+                    source,
+                });
+                let _ = std::fs::remove_file(&tmp);
+            }
+        } else {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        forget(&tmp);
+    }
+    result
+}
+
 /// Remembers a staging folder (incomplete output) for [`cleanup_all`].
 pub fn register_partial_dir(dir: &Path) {
     LIVE_DIRS.lock().map(|mut l| l.push(dir.to_path_buf())).ok();
@@ -42,54 +99,287 @@ pub fn unregister_partial_dir(dir: &Path) {
     LIVE_DIRS.lock().map(|mut l| l.retain(|p| p != dir)).ok();
 }
 
+fn forget(tmp: &Path) {
+    LIVE.lock().map(|mut l| l.retain(|p| p != tmp)).ok();
+}
+
+fn write_error(path: &Path, kind: std::io::ErrorKind, message: String) -> IoError {
+    IoError::Write {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(kind, message),
+    }
+}
+
+/// Where an output to `target` really goes, and how.
+enum Target {
+    /// Regular file (existing or new): temporary + rename onto this path.
+    Replace(PathBuf),
+    /// Character device: written through.
+    Device,
+}
+
+fn classify(target: &Path) -> Result<Target, IoError> {
+    use std::io::ErrorKind as K;
+    if target.as_os_str().is_empty() {
+        return Err(write_error(
+            target,
+            K::InvalidInput,
+            "empty file name".into(),
+        ));
+    }
+    match std::fs::metadata(target) {
+        Ok(meta) => {
+            let ft = meta.file_type();
+            if ft.is_dir() {
+                return Err(write_error(
+                    target,
+                    K::InvalidInput,
+                    "is a directory; give a file name".into(),
+                ));
+            }
+            if ft.is_file() {
+                // Follow a symbolic link: replace what it points to.
+                let real = if std::fs::symlink_metadata(target)
+                    .map(|m| m.file_type().is_symlink())
+                    .unwrap_or(false)
+                {
+                    std::fs::canonicalize(target).unwrap_or_else(|_| target.to_path_buf())
+                } else {
+                    target.to_path_buf()
+                };
+                return Ok(Target::Replace(real));
+            }
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::FileTypeExt;
+                if ft.is_char_device() {
+                    return Ok(Target::Device);
+                }
+                let what = if ft.is_fifo() {
+                    "a FIFO"
+                } else if ft.is_socket() {
+                    "a socket"
+                } else if ft.is_block_device() {
+                    "a block device"
+                } else {
+                    "not a regular file"
+                };
+                Err(write_error(
+                    target,
+                    K::InvalidInput,
+                    format!("is {what}; refusing to write to it (give a regular file name)"),
+                ))
+            }
+            #[cfg(not(unix))]
+            Err(write_error(
+                target,
+                K::InvalidInput,
+                "is not a regular file; refusing to write to it".into(),
+            ))
+        }
+        Err(_) => {
+            if target.to_string_lossy().ends_with('/') {
+                return Err(write_error(
+                    target,
+                    K::InvalidInput,
+                    "is a directory name; give a file name".into(),
+                ));
+            }
+            Ok(Target::Replace(target.to_path_buf()))
+        }
+    }
+}
+
+/// `path` made absolute (the folder canonicalised when it exists), to
+/// compare output targets.
+fn normalised(path: &Path) -> PathBuf {
+    let abs = if path.is_absolute() {
+        path.to_path_buf()
+    } else {
+        std::env::current_dir()
+            .map(|d| d.join(path))
+            .unwrap_or_else(|_| path.to_path_buf())
+    };
+    match (abs.parent(), abs.file_name()) {
+        (Some(dir), Some(name)) => std::fs::canonicalize(dir)
+            .map(|d| d.join(name))
+            .unwrap_or(abs),
+        _ => abs,
+    }
+}
+
+/// Registers `target` as an output of this run; refuses a second output to
+/// the same file.
+fn claim(shown: &Path, real: &Path) -> Result<PathBuf, IoError> {
+    let key = normalised(real);
+    let mut t = TARGETS.lock().unwrap_or_else(|e| e.into_inner());
+    if t.contains(&key) {
+        return Err(write_error(
+            shown,
+            std::io::ErrorKind::AlreadyExists,
+            "the same file is given for two outputs; give each output its own name".into(),
+        ));
+    }
+    t.push(key.clone());
+    Ok(key)
+}
+
+fn release(key: &Path) {
+    TARGETS.lock().map(|mut l| l.retain(|p| p != key)).ok();
+}
+
+/// Checks before any work that `targets` can be written: no directory, FIFO,
+/// socket or block device, an existing folder, and no file named twice.
+/// The label says which option each path came from.
+pub fn check_targets(targets: &[(&str, &Path)]) -> Result<(), IoError> {
+    let mut seen: Vec<(PathBuf, &str)> = Vec::new();
+    for &(label, path) in targets {
+        let real = match classify(path) {
+            Ok(Target::Replace(p)) => p,
+            Ok(Target::Device) => continue,
+            Err(IoError::Write { source, .. }) => {
+                return Err(write_error(
+                    path,
+                    source.kind(),
+                    format!("{label}: {source}"),
+                ))
+            }
+            Err(e) => return Err(e),
+        };
+        let dir = real
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        if !dir.is_dir() {
+            return Err(write_error(
+                path,
+                std::io::ErrorKind::NotFound,
+                format!("{label}: folder {} does not exist", dir.display()),
+            ));
+        }
+        let key = normalised(&real);
+        if let Some((_, other)) = seen.iter().find(|(k, _)| *k == key) {
+            return Err(write_error(
+                path,
+                std::io::ErrorKind::AlreadyExists,
+                format!("given for both {other} and {label}; give each output its own file"),
+            ));
+        }
+        seen.push((key, label));
+    }
+    Ok(())
+}
+
 /// A file being written; invisible under its final name until committed.
 pub struct AtomicFile {
     target: PathBuf,
-    tmp: PathBuf,
+    /// Temporary; `None` when writing through to a device.
+    tmp: Option<PathBuf>,
+    /// Where the temporary is renamed to (the target, or a link's target).
+    dest: PathBuf,
+    /// The claimed (normalised) target, released unless a deferred commit
+    /// keeps it for the rest of the run.
+    claim: Option<PathBuf>,
     writer: Option<BufWriter<File>>,
 }
 
 impl AtomicFile {
     pub fn create(target: &Path) -> Result<Self, IoError> {
-        let dir = target
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        let name = target
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let tmp = dir.join(format!(".{name}.{}.partial", std::process::id()));
-        let f = File::create(&tmp).map_err(|source| IoError::Write {
-            path: target.to_path_buf(),
-            source,
-        })?;
-        LIVE.lock().map(|mut l| l.push(tmp.clone())).ok();
-        Ok(Self {
-            target: target.to_path_buf(),
-            tmp,
-            writer: Some(BufWriter::with_capacity(1 << 20, f)),
-        })
+        match classify(target)? {
+            Target::Device => {
+                let f = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(target)
+                    .map_err(|source| IoError::Write {
+                        path: target.to_path_buf(),
+                        source,
+                    })?;
+                Ok(Self {
+                    target: target.to_path_buf(),
+                    tmp: None,
+                    dest: target.to_path_buf(),
+                    claim: None,
+                    writer: Some(BufWriter::with_capacity(1 << 20, f)),
+                })
+            }
+            Target::Replace(dest) => {
+                let key = claim(target, &dest)?;
+                let dir = dest
+                    .parent()
+                    .filter(|p| !p.as_os_str().is_empty())
+                    .unwrap_or(Path::new("."));
+                let name = dest
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                let tmp = dir.join(format!(".{name}.{}.partial", std::process::id()));
+                let f = File::create(&tmp).map_err(|source| {
+                    release(&key);
+                    IoError::Write {
+                        path: target.to_path_buf(),
+                        source,
+                    }
+                })?;
+                LIVE.lock().map(|mut l| l.push(tmp.clone())).ok();
+                Ok(Self {
+                    target: target.to_path_buf(),
+                    tmp: Some(tmp),
+                    dest,
+                    claim: Some(key),
+                    writer: Some(BufWriter::with_capacity(1 << 20, f)),
+                })
+            }
+        }
     }
 
     pub fn writer(&mut self) -> &mut BufWriter<File> {
         self.writer.as_mut().expect("writer present until commit")
     }
 
-    /// Flushes and renames the temporary over the target.
+    /// Flushes and renames the temporary over the target (or, with
+    /// [`defer_commits`], queues the rename). On failure the temporary is
+    /// removed.
     pub fn commit(mut self) -> Result<(), IoError> {
+        let result = self.finish();
+        if result.is_err() {
+            if let Some(tmp) = &self.tmp {
+                let _ = std::fs::remove_file(tmp);
+                forget(tmp);
+            }
+        }
+        result
+    }
+
+    fn finish(&mut self) -> Result<(), IoError> {
         let w = self.writer.take().expect("writer present until commit");
-        let f = w.into_inner().map_err(|e| IoError::Write {
-            path: self.target.clone(),
-            source: e.into_error(),
-        })?;
-        f.sync_all().ok();
-        drop(f);
-        std::fs::rename(&self.tmp, &self.target).map_err(|source| IoError::Write {
+        let err = |source| IoError::Write {
             path: self.target.clone(),
             source,
-        })?;
-        LIVE.lock().map(|mut l| l.retain(|p| p != &self.tmp)).ok();
+        };
+        let f = w.into_inner().map_err(|e| err(e.into_error()))?;
+        let Some(tmp) = &self.tmp else {
+            // A device: flushed above; a sync error (e.g. EINVAL on a
+            // terminal) is not a write error.
+            return Ok(());
+        };
+        if let Err(e) = f.sync_all() {
+            // ENOSPC, EIO, EDQUOT: the data may not be on disk.
+            if matches!(e.raw_os_error(), Some(28) | Some(5) | Some(122)) {
+                return Err(err(e));
+            }
+        }
+        drop(f);
+        if DEFER.load(Ordering::SeqCst) {
+            PENDING
+                .lock()
+                .map(|mut p| p.push((tmp.clone(), self.dest.clone())))
+                .ok();
+            // The target stays claimed for the rest of the run.
+            self.claim = None;
+            return Ok(());
+        }
+        std::fs::rename(tmp, &self.dest).map_err(err)?;
+        forget(tmp);
         Ok(())
     }
 }
@@ -105,10 +395,15 @@ impl Write for AtomicFile {
 
 impl Drop for AtomicFile {
     fn drop(&mut self) {
+        if let Some(key) = self.claim.take() {
+            release(&key);
+        }
         if self.writer.is_some() {
             self.writer = None;
-            let _ = std::fs::remove_file(&self.tmp);
-            LIVE.lock().map(|mut l| l.retain(|p| p != &self.tmp)).ok();
+            if let Some(tmp) = &self.tmp {
+                let _ = std::fs::remove_file(tmp);
+                forget(tmp);
+            }
         }
     }
 }

@@ -99,6 +99,12 @@ pub fn read_frf_csv(path: &Path) -> Result<FrfTable, FrfFileError> {
         path: path.into(),
         source,
     })?;
+    parse_frf_csv(&text, path)
+}
+
+/// Parses an FRF table from CSV text (`path` only names it in errors).
+pub fn parse_frf_csv(text: &str, path: &Path) -> Result<FrfTable, FrfFileError> {
+    let text = crate::strip_bom(text);
     let mut header: Option<Vec<String>> = None;
     let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
@@ -305,6 +311,25 @@ pub fn read_time_history(path: &Path, fs: Option<f64>) -> Result<TimeHistory, Fr
         path: path.into(),
         source,
     })?;
+    parse_time_history(&text, path, fs)
+}
+
+/// Parses time histories (CSV or Polytec ASCII export) from text (`path`
+/// only names it in errors).
+pub fn parse_time_history(
+    text: &str,
+    path: &Path,
+    fs: Option<f64>,
+) -> Result<TimeHistory, FrfFileError> {
+    if let Some(f) = fs {
+        if !(f.is_finite() && f > 0.0) {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!("sampling frequency {f} Hz must be > 0"),
+            });
+        }
+    }
+    let text = crate::strip_bom(text);
     if text.starts_with("Source File Name") {
         return read_polytec_time(path, &text, fs);
     }
@@ -474,6 +499,12 @@ pub fn read_polytec_sweep(path: &Path) -> Result<Vec<SweepRun>, FrfFileError> {
         path: path.into(),
         source,
     })?;
+    parse_polytec_sweep(&bytes, path)
+}
+
+/// Parses a Polytec swept-sine export held in `bytes` (latin-1; `path` only
+/// names it in errors).
+pub fn parse_polytec_sweep(bytes: &[u8], path: &Path) -> Result<Vec<SweepRun>, FrfFileError> {
     let text: String = bytes.iter().map(|&b| b as char).collect(); // latin-1
     let mut runs: Vec<SweepRun> = Vec::new();
     for (i, raw) in text.lines().enumerate().skip(2) {

@@ -14,11 +14,18 @@
 //!   at 90° phase per level) for `nlsdof fit --phase-resonance`.
 
 pub mod atomic;
+pub mod bounds_file;
 pub mod error;
 pub mod frf_file;
+pub mod mat5;
 pub mod model_file;
 pub mod phase_resonance_data;
 pub mod signal_file;
 pub mod stepped_sine_data;
 
 pub use error::IoError;
+
+/// `text` without a leading UTF-8 byte-order mark (Excel writes one).
+pub(crate) fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}

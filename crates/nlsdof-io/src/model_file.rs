@@ -79,7 +79,7 @@ impl ModelFile {
 
 /// Parses model TOML text; `path` is used in error messages only.
 pub fn parse_model(text: &str, path: &Path) -> Result<Model, IoError> {
-    let file: ModelFile = toml::from_str(text).map_err(|e| IoError::Parse {
+    let file: ModelFile = toml::from_str(crate::strip_bom(text)).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         message: e.message().to_string(),
     })?;

@@ -11,7 +11,7 @@
 //!   (so the output of `nlsdof simulate` can be read back). Lines starting
 //!   with `#` are comments. A time column that is uniform to within 1e-3 of
 //!   a step is stored as `(t0, fs)`.
-//! * **MATLAB MAT v5** (`.mat`, via the `matfile` crate): a numeric array,
+//! * **MATLAB MAT v5** (`.mat`, read by [`crate::mat5`]): a numeric array,
 //!   either an `n×2` (or `2×n`) matrix `[t accel]` or a vector plus `fs`
 //!   (from the caller, or a scalar variable `fs` in the file, or a vector
 //!   `t`/`time` of the same length). With several arrays in the file the
@@ -76,8 +76,11 @@ pub enum SignalFileError {
         wanted: &'static str,
         found: String,
     },
-    #[error("{path}: not a readable MAT v5 file: {message}")]
-    Mat { path: PathBuf, message: String },
+    #[error("{path}: {source}")]
+    Mat {
+        path: PathBuf,
+        source: crate::mat5::MatError,
+    },
     #[error("{path}: {message}")]
     MatContent { path: PathBuf, message: String },
 }
@@ -211,13 +214,23 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
         path: path.into(),
         source,
     })?;
+    parse_csv(std::io::BufReader::with_capacity(1 << 20, file), path, fs)
+}
+
+/// Parses a CSV signal from `reader` (`path` only names it in errors).
+pub fn parse_csv<R: std::io::Read>(
+    reader: R,
+    path: &Path,
+    fs: Option<f64>,
+) -> Result<Signal, SignalFileError> {
+    check_fs(path, fs)?;
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .buffer_capacity(1 << 20)
-        .from_reader(std::io::BufReader::with_capacity(1 << 20, file));
+        .from_reader(reader);
     let mut rec = csv::ByteRecord::new();
     let csv_err = |e: csv::Error| match e.into_kind() {
         csv::ErrorKind::Io(source) => SignalFileError::Read {
@@ -353,31 +366,6 @@ pub fn read_csv(path: &Path, fs: Option<f64>) -> Result<Signal, SignalFileError>
     finish(path, values, times, fs)
 }
 
-fn to_f64(data: &matfile::NumericData) -> Option<Vec<f64>> {
-    use matfile::NumericData as N;
-    macro_rules! conv {
-        ($real:expr, $imag:expr) => {
-            if $imag.is_some() {
-                None
-            } else {
-                Some($real.iter().map(|&v| v as f64).collect())
-            }
-        };
-    }
-    match data {
-        N::Double { real, imag } => conv!(real, imag),
-        N::Single { real, imag } => conv!(real, imag),
-        N::Int8 { real, imag } => conv!(real, imag),
-        N::UInt8 { real, imag } => conv!(real, imag),
-        N::Int16 { real, imag } => conv!(real, imag),
-        N::UInt16 { real, imag } => conv!(real, imag),
-        N::Int32 { real, imag } => conv!(real, imag),
-        N::UInt32 { real, imag } => conv!(real, imag),
-        N::Int64 { real, imag } => conv!(real, imag),
-        N::UInt64 { real, imag } => conv!(real, imag),
-    }
-}
-
 /// Reads a MAT v5 signal (see the module docs).
 pub fn read_mat(
     path: &Path,
@@ -385,38 +373,62 @@ pub fn read_mat(
     var: Option<&str>,
 ) -> Result<Signal, SignalFileError> {
     check_fs(path, fs)?;
-    let file = std::fs::File::open(path).map_err(|source| SignalFileError::Read {
+    let arrays = crate::mat5::read(path)
+        .map_err(|source| SignalFileError::Read {
+            path: path.into(),
+            source,
+        })?
+        .map_err(|source| SignalFileError::Mat {
+            path: path.into(),
+            source,
+        })?;
+    mat_signal(arrays, path, fs, var)
+}
+
+/// Parses a MAT v5 signal held in `bytes` (`path` only names it in errors).
+pub fn parse_mat(
+    bytes: &[u8],
+    path: &Path,
+    fs: Option<f64>,
+    var: Option<&str>,
+) -> Result<Signal, SignalFileError> {
+    check_fs(path, fs)?;
+    let arrays = crate::mat5::parse(bytes).map_err(|source| SignalFileError::Mat {
         path: path.into(),
         source,
     })?;
-    let mat = matfile::MatFile::parse(std::io::BufReader::new(file)).map_err(|e| {
-        SignalFileError::Mat {
-            path: path.into(),
-            message: e.to_string(),
-        }
-    })?;
+    mat_signal(arrays, path, fs, var)
+}
+
+fn mat_signal(
+    arrays: Vec<crate::mat5::MatArray>,
+    path: &Path,
+    fs: Option<f64>,
+    var: Option<&str>,
+) -> Result<Signal, SignalFileError> {
+    let find = |name: &str| arrays.iter().find(|a| a.name == name);
+    let real = |a: &crate::mat5::MatArray| (!a.complex).then(|| a.real.clone());
     let content = |message: String| SignalFileError::MatContent {
         path: path.into(),
         message,
     };
-    let names: Vec<String> = mat
-        .arrays()
+    let names: Vec<String> = arrays
         .iter()
-        .map(|a| format!("{}{:?}", a.name(), a.size()))
+        .map(|a| format!("{}{:?}", a.name, a.dims))
         .collect();
-    let numel = |a: &matfile::Array| a.size().iter().product::<usize>();
+    let numel = |a: &crate::mat5::MatArray| a.numel();
     let array = match var {
-        Some(v) => mat.find_by_name(v).ok_or_else(|| {
+        Some(v) => find(v).ok_or_else(|| {
             content(format!(
                 "no numeric variable {v:?} (variables: {})",
                 names.join(", ")
             ))
         })?,
         None => {
-            let big: Vec<&matfile::Array> = mat.arrays().iter().filter(|a| numel(a) > 1).collect();
+            let big: Vec<&crate::mat5::MatArray> = arrays.iter().filter(|a| numel(a) > 1).collect();
             let named = big
                 .iter()
-                .find(|a| ["accel", "acceleration", "gamma", "u"].contains(&a.name()));
+                .find(|a| ["accel", "acceleration", "gamma", "u"].contains(&a.name.as_str()));
             match (big.len(), named) {
                 (0, _) => return Err(SignalFileError::Empty { path: path.into() }),
                 (1, _) => big[0],
@@ -430,11 +442,11 @@ pub fn read_mat(
             }
         }
     };
-    let size = array.size().clone();
-    let data = to_f64(array.data()).ok_or_else(|| {
+    let size = array.dims.clone();
+    let data = real(array).ok_or_else(|| {
         content(format!(
             "variable {:?} is complex; a real signal is needed",
-            array.name()
+            array.name
         ))
     })?;
     if data.is_empty() {
@@ -483,19 +495,17 @@ pub fn read_mat(
         if let Some(fs) = fs {
             return finish(path, values, None, Some(fs));
         }
-        if let Some(a) = mat.find_by_name("fs").filter(|a| numel(a) == 1) {
-            let f = to_f64(a.data())
-                .and_then(|v| v.first().copied())
-                .unwrap_or(f64::NAN);
+        if let Some(a) = find("fs").filter(|a| numel(a) == 1) {
+            let f = real(a).and_then(|v| v.first().copied()).unwrap_or(f64::NAN);
             check_fs(path, Some(f))?;
             return finish(path, values, None, Some(f));
         }
         if let Some(t) = ["t", "time"]
             .iter()
-            .filter_map(|n| mat.find_by_name(n))
-            .find(|a| numel(a) == values.len() && a.name() != array.name())
+            .filter_map(|n| find(n))
+            .find(|a| numel(a) == values.len() && a.name != array.name)
         {
-            let t = to_f64(t.data()).ok_or_else(|| content("time vector is complex".into()))?;
+            let t = real(t).ok_or_else(|| content("time vector is complex".into()))?;
             check_times(&t)?;
             return finish(path, values, Some(t), None);
         }
@@ -521,8 +531,7 @@ pub fn read_mat(
     }
     Err(content(format!(
         "variable {:?} has size {:?}; expected a vector (with fs) or an n×2 [t accel] matrix",
-        array.name(),
-        size
+        array.name, size
     )))
 }
 

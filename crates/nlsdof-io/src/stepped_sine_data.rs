@@ -101,6 +101,7 @@ pub fn parse_csv(
     path: &Path,
     opts: &ReadOptions,
 ) -> Result<Dataset, SteppedSineDataError> {
+    let text = crate::strip_bom(text);
     let mut lines = text
         .lines()
         .enumerate()
@@ -138,6 +139,13 @@ pub fn parse_csv(
             message,
         };
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() > cols.len() {
+            return Err(err(format!(
+                "{} fields, but the header names {} columns",
+                fields.len(),
+                cols.len()
+            )));
+        }
         let get = |c: usize, name: &str| {
             fields
                 .get(c)

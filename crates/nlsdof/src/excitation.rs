@@ -219,6 +219,13 @@ impl SteppedSine {
         if omegas.is_empty() {
             return Err(SimulationError::EmptyInput);
         }
+        if omegas.len() > crate::stepped_sine::MAX_STEPS {
+            return Err(SimulationError::InvalidOption {
+                name: "stepped-sine steps",
+                value: omegas.len() as f64,
+                reason: "must be <= 1000000",
+            });
+        }
         for &w in &omegas {
             check_positive("omega", w)?;
         }
@@ -566,5 +573,75 @@ mod tests {
             Some((0.0, 1.0 / 0.50000005))
         );
         assert_eq!(SampledInput::detect_uniform(&[0.0, 0.6, 1.0], 1e-3), None);
+    }
+}
+
+/// `values` (uniformly sampled) resampled `factor` times finer by 4-point
+/// (cubic) Lagrange interpolation — the 3 neighbours' cubic through the
+/// samples on each side of the interval; one-sided cubic on the first and
+/// last interval, linear for fewer than 4 samples. The original samples are
+/// kept exactly at indices `k · factor`; the result has
+/// `(len − 1) · factor + 1` values. Interpolation error for a sine of `N`
+/// samples per cycle: about `(3/128)(2π/N)⁴` of its amplitude at mid-interval
+/// (2.3e-4 at N = 20).
+///
+/// Used to drive RK4 with stage inputs of cubic (4th-order) accuracy between
+/// the samples instead of linear, whose mid-interval error is 2nd order
+/// (0.8 % of the amplitude at N = 20).
+pub fn upsample_cubic(values: &[f64], factor: usize) -> Vec<f64> {
+    let n = values.len();
+    if n == 0 || factor <= 1 {
+        return values.to_vec();
+    }
+    let mut out = Vec::with_capacity((n - 1) * factor + 1);
+    for i in 0..n - 1 {
+        out.push(values[i]);
+        for j in 1..factor {
+            let s = j as f64 / factor as f64;
+            let v = if n < 4 {
+                values[i] + s * (values[i + 1] - values[i])
+            } else {
+                // nodes b, b+1, b+2, b+3 around the interval [i, i+1]
+                let b = i.saturating_sub(1).min(n - 4);
+                let x = (i - b) as f64 + s; // position in node coordinates
+                let p = &values[b..b + 4];
+                let l0 = -(x - 1.0) * (x - 2.0) * (x - 3.0) / 6.0;
+                let l1 = x * (x - 2.0) * (x - 3.0) / 2.0;
+                let l2 = -x * (x - 1.0) * (x - 3.0) / 2.0;
+                let l3 = x * (x - 1.0) * (x - 2.0) / 6.0;
+                l0 * p[0] + l1 * p[1] + l2 * p[2] + l3 * p[3]
+            };
+            out.push(v);
+        }
+    }
+    out.push(values[n - 1]);
+    out
+}
+
+#[cfg(test)]
+mod upsample_tests {
+    use super::upsample_cubic;
+
+    #[test]
+    fn cubic_upsampling_is_exact_for_cubics_and_keeps_samples() {
+        let f = |t: f64| 1.0 - 2.0 * t + 0.5 * t * t - 0.1 * t * t * t;
+        let v: Vec<f64> = (0..7).map(|k| f(k as f64)).collect();
+        let u = upsample_cubic(&v, 4);
+        assert_eq!(u.len(), 25);
+        for (k, &x) in u.iter().enumerate() {
+            let t = k as f64 / 4.0;
+            assert!((x - f(t)).abs() < 1e-12, "{t}: {x} vs {}", f(t));
+        }
+        for k in 0..7 {
+            assert_eq!(u[4 * k], v[k]);
+        }
+        // a sine at 20 samples per cycle: mid-interval error ~2.3e-4
+        let w = 2.0 * std::f64::consts::PI / 20.0;
+        let s: Vec<f64> = (0..200).map(|k| (w * k as f64).sin()).collect();
+        let u = upsample_cubic(&s, 2);
+        let err = (20..180)
+            .map(|k| (u[2 * k + 1] - (w * (k as f64 + 0.5)).sin()).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 3e-4 && err > 1e-4, "{err:e}");
     }
 }

@@ -48,6 +48,12 @@ use crate::simulation::rk4::step;
 use crate::simulation::{check_model, Sample, SimulationError, State, Summary};
 use std::f64::consts::{PI, TAU};
 
+/// Largest accepted `samples_per_cycle` (the per-cycle tables are allocated
+/// up front).
+pub const MAX_SAMPLES_PER_CYCLE: usize = 100_000;
+/// Largest number of frequency steps of one sweep.
+pub const MAX_STEPS: usize = 1_000_000;
+
 /// Rig settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RigOptions {
@@ -134,6 +140,13 @@ fn check_options(o: &RigOptions) -> Result<(), SimulationError> {
             "samples per cycle",
             o.samples_per_cycle as f64,
             "must be >= 16",
+        );
+    }
+    if o.samples_per_cycle > MAX_SAMPLES_PER_CYCLE {
+        return bad(
+            "samples per cycle",
+            o.samples_per_cycle as f64,
+            "must be <= 100000",
         );
     }
     if !(o.tolerance.is_finite() && o.tolerance > 0.0) {

@@ -284,3 +284,32 @@ fn bad_signals_give_typed_errors() {
         .zip(&e.gxx)
         .all(|(h, &g)| g == 0.0 || (h - C64::new(1.0, 0.0)).norm() < 1e-12));
 }
+
+/// Issue 11: an all-zero (or constant, with mean removal) input channel with
+/// a live output gave |H1| ~ 1e16 at coherence 0.98, because X and Y share
+/// one complex FFT and round-off from Y leaks into X. It is an error.
+#[test]
+fn silent_input_with_live_output_is_no_input_power() {
+    let n = 4096;
+    let y: Vec<f64> = (0..n)
+        .map(|k| (k as f64 * 0.37).sin() + 0.3 * (k as f64 * 1.91).cos())
+        .collect();
+    let o = WelchOptions {
+        segment: 512,
+        ..Default::default()
+    };
+    for x in [vec![0.0; n], vec![2.5; n]] {
+        assert_eq!(
+            welch_frf(1000.0, &x, &y, &o).unwrap_err(),
+            SignalError::NoInputPower
+        );
+    }
+    assert_eq!(
+        spectral_ratio(1000.0, &vec![0.0; n], &y).unwrap_err(),
+        SignalError::NoInputPower
+    );
+    // A weak but real input is still accepted.
+    let x: Vec<f64> = (0..n).map(|k| 1e-9 * (k as f64 * 0.37).sin()).collect();
+    let e = welch_frf(1000.0, &x, &y, &o).unwrap();
+    assert!(e.h1.iter().all(|h| h.re.is_finite() && h.im.is_finite()));
+}

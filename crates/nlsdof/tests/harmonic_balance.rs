@@ -786,3 +786,42 @@ fn stability_flags_agree_with_slow_flow_integration() {
     }
     assert!(checked.0 >= 6 && checked.1 >= 4, "{checked:?}");
 }
+
+/// Issue 11: `roots` said "no positive root" for k_r beyond ~1e150 because
+/// the squared coefficient s₁² of the expanded equation overflowed. For a
+/// huge k_r the root is x = (4 m γ / (3 k_r))^{1/3} (stiffness-dominated
+/// cubic term, g(2) = 3/4); the sweep (Newton path) agrees.
+#[test]
+fn extreme_stiffness_coefficient_keeps_its_root() {
+    let w = 2.0 * PI * 10.0;
+    for &kr in &[1e100, 1e150, 1e170, 1e200, 1e250, 1e300] {
+        let m = Model::linear(1.0, 3947.84, 1.2566)
+            .unwrap()
+            .with_stiffness(kr, 2.0)
+            .unwrap();
+        let r = ForcedResponse::new(&m, 1.0, Formulation::HarmonicBalance).unwrap();
+        let set = r.steady_states(w).unwrap();
+        assert_eq!(set.roots.len(), 1, "k_r = {kr:e}: {set:?}");
+        let x = set.roots[0].amplitude;
+        let want = (4.0 / (3.0 * kr)).powf(1.0 / 3.0);
+        assert!(
+            ((x - want) / want).abs() < 1e-9,
+            "k_r = {kr:e}: {x:e} vs {want:e}"
+        );
+        let sw = r.sweep(&[w], SweepDirection::Up).unwrap();
+        assert!(
+            ((sw.points[0].amplitude - x) / x).abs() < 1e-9,
+            "k_r = {kr:e}"
+        );
+    }
+    // 1e300 is the issue's case: 1.1006424163e-100 m
+    let m = Model::linear(1.0, 3947.84, 1.2566)
+        .unwrap()
+        .with_stiffness(1e300, 2.0)
+        .unwrap();
+    let set = ForcedResponse::new(&m, 1.0, Formulation::HarmonicBalance)
+        .unwrap()
+        .steady_states(w)
+        .unwrap();
+    assert!((set.roots[0].amplitude / 1.1006424163e-100 - 1.0).abs() < 1e-10);
+}

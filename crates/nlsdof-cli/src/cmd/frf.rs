@@ -165,6 +165,7 @@ fn hz(omega: f64) -> f64 {
 pub fn run(args: Args) -> Result<(), CliError> {
     // All checks first, all computation in memory; files are written last
     // and atomically, so an error never leaves a file behind.
+    plot::check_svg_name(args.plot.as_deref())?;
     let gammas = parse_gammas(&args.gamma)?;
     let f_min = check_frequency("--f-min", args.f_min)?;
     let f_max = check_frequency("--f-max", args.f_max)?;
@@ -219,7 +220,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else if args.csv {
         csv_output(&levels)
     } else {
-        text_output(&args, &model, &levels, f_min, f_max)
+        crate::error::compact_numbers(&text_output(&args, &model, &levels, f_min, f_max))
     };
 
     if let Some(path) = &args.plot {
@@ -260,18 +261,21 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
                 .points
                 .iter()
                 .map(|p| {
+                    // no finite steady state: no amplitude, no phase
+                    let num = |v: f64| (!p.unbounded).then_some(v);
                     json!({
                         "f_hz": hz(p.omega),
-                        "amplitude": p.amplitude,
-                        "phase_deg": p.phase.to_degrees(),
+                        "amplitude": num(p.amplitude),
+                        "phase_deg": num(p.phase.to_degrees()),
                         "stable": p.stable,
                         "sticking": p.sticking,
+                        "unbounded": p.unbounded,
                         // first order: x = a cos(Ωt − φ), no other harmonic
                         "harmonics": [
-                            {"order": 0, "amplitude": 0.0, "phase_deg": 0.0},
-                            {"order": 1, "amplitude": p.amplitude, "phase_deg": p.phase.to_degrees()},
+                            {"order": 0, "amplitude": num(0.0), "phase_deg": num(0.0)},
+                            {"order": 1, "amplitude": num(p.amplitude), "phase_deg": num(p.phase.to_degrees())},
                         ],
-                        "max_abs_x": p.amplitude,
+                        "max_abs_x": num(p.amplitude),
                     })
                 })
                 .collect();
@@ -315,7 +319,8 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
 /// CSV rows; the first five columns are the contract, `sweep` matches the
 /// stepped-sine data format read by the fitting commands, `stable` and
 /// `sticking` flag each point. A sticking point (no steady motion) has
-/// amplitude 0 and an empty phase (there is no phase to report).
+/// amplitude 0 and an empty phase (there is no phase to report); a point
+/// without a finite steady state (undamped resonance) has both empty.
 fn csv_output(levels: &[Level]) -> String {
     let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking\n");
     for (i, l) in levels.iter().enumerate() {
@@ -324,10 +329,15 @@ fn csv_output(levels: &[Level]) -> String {
             nlsdof::SweepDirection::Down => "down",
         };
         for p in &l.sweep.points {
-            let phase = if p.sticking {
+            let phase = if p.sticking || p.unbounded {
                 String::new()
             } else {
                 format!("{}", p.phase.to_degrees())
+            };
+            let amplitude = if p.unbounded {
+                String::new()
+            } else {
+                format!("{}", p.amplitude)
             };
             let _ = writeln!(
                 s,
@@ -335,7 +345,7 @@ fn csv_output(levels: &[Level]) -> String {
                 i + 1,
                 l.gamma,
                 hz(p.omega),
-                p.amplitude,
+                amplitude,
                 phase,
                 sweep,
                 p.stable,
@@ -387,7 +397,7 @@ fn text_output(
             .sweep
             .points
             .iter()
-            .filter(|p| !p.sticking)
+            .filter(|p| !p.sticking && !p.unbounded)
             .max_by(|a, b| a.amplitude.total_cmp(&b.amplitude));
         match peak {
             Some(p) => {
@@ -421,11 +431,20 @@ fn text_output(
                 l.sweep.points.len()
             );
         }
+        let unbounded = l.sweep.points.iter().filter(|p| p.unbounded).count();
+        if let Some(first) = l.sweep.points.iter().find(|p| p.unbounded) {
+            let _ = writeln!(
+                s,
+                "  no finite state    at {unbounded} of {} steps (first {:.6} Hz): the response grows without bound (no damping at resonance)",
+                l.sweep.points.len(),
+                hz(first.omega)
+            );
+        }
         let unstable = l
             .sweep
             .points
             .iter()
-            .filter(|p| !p.sticking && !p.stable)
+            .filter(|p| !p.sticking && !p.unbounded && !p.stable)
             .count();
         if unstable > 0 {
             let _ = writeln!(

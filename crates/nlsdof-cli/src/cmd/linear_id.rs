@@ -80,7 +80,7 @@ pub struct Args {
     /// Frequency weighting of the least-squares fit.
     #[arg(long, value_enum, default_value_t = WeightArg::Uniform)]
     pub weight: WeightArg,
-    /// Iteration limit of the vector fitting.
+    /// Iteration limit of the vector fitting (1 to 10000).
     #[arg(long = "max-iterations", value_name = "N", default_value_t = 30)]
     pub max_iterations: usize,
     /// Write the SDoF linear part as a model file (TOML) to FILE.
@@ -149,6 +149,13 @@ struct Identified {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    crate::plot::check_svg_name(args.plot.as_deref())?;
+    if args.max_iterations == 0 || args.max_iterations > 10_000 {
+        return Err(usage(format!(
+            "--max-iterations {}: need 1 to 10000 vector-fitting iterations",
+            args.max_iterations
+        )));
+    }
     let table = nlsdof_io::frf_file::read_frf_csv(&args.frf)?;
     let f_lo = args.f_min.unwrap_or(f64::NEG_INFINITY);
     let f_hi = args.f_max.unwrap_or(f64::INFINITY);
@@ -220,7 +227,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             constant: !args.no_constant,
             proportional: args.proportional,
             weights,
-            max_iterations: args.max_iterations.max(1),
+            max_iterations: args.max_iterations,
             ..Default::default()
         };
         let fitted = if args.poles.eq_ignore_ascii_case("auto") {
@@ -315,12 +322,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         nlsdof_io::atomic::write_atomic(path, s.as_bytes())?;
     }
     if let (Some(path), Some(s)) = (&args.plot, &svg) {
-        if let Err(e) = nlsdof_io::atomic::write_atomic(path, s.as_bytes()) {
-            if let Some(out) = &args.out {
-                let _ = std::fs::remove_file(out);
-            }
-            return Err(e.into());
-        }
+        // Committed together with --out at the end of the run (all or nothing).
+        nlsdof_io::atomic::write_atomic(path, s.as_bytes())?;
     }
     print!("{text}");
     Ok(())

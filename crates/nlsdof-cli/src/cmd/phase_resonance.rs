@@ -35,7 +35,12 @@ pub struct PrArgs {
     /// a relative frequency error zeta0*e costs as much as a relative amplitude error e
     /// (zeta0 = damping ratio of the lowest level), as a relative error e of the measured
     /// response does to the two. > 1 trusts the frequencies more.
-    #[arg(long = "frequency-weight", value_name = "W", default_value_t = 1.0)]
+    #[arg(
+        long = "frequency-weight",
+        value_name = "W",
+        default_value_t = 1.0,
+        requires = "phase_resonance"
+    )]
     pub frequency_weight: f64,
     /// Sign of the nonlinear stiffness beta: data (default: sweeps take the sign of the
     /// branch-free equation-error estimate; phase-resonance points are fitted hardening),

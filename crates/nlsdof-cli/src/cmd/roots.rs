@@ -192,7 +192,7 @@ EXAMPLE:
 /// Six significant digits, without trailing zeros.
 fn round6(v: f64) -> String {
     let s = format!("{v:.5e}");
-    s.parse::<f64>().map(|x| x.to_string()).unwrap_or(s)
+    s.parse::<f64>().map(crate::error::num).unwrap_or(s)
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -229,6 +229,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 out["input_force_n"] = json!(input_accel * model.mass);
             }
             Some(NoMotion::NoRoot) => out["no_motion"] = json!("no_root"),
+            Some(NoMotion::Unbounded) => out["no_motion"] = json!("unbounded"),
         }
         println!("{out}");
         return Ok(());
@@ -236,7 +237,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
     println!("model {}: {}", args.model.display(), model_summary(&model));
     println!(
-        "gamma = {gamma} m/s^2 zero-to-peak, f = {f_hz} Hz, formulation: {} ({})",
+        "gamma = {} m/s^2 zero-to-peak, f = {} Hz, formulation: {} ({})",
+        crate::error::num(gamma),
+        crate::error::num(f_hz),
         args.formulation.name(),
         args.formulation.description()
     );
@@ -254,6 +257,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         Some(NoMotion::NoRoot) => {
             println!("no steady motion: the harmonic-balance equation has no positive root");
+        }
+        Some(NoMotion::Unbounded) => {
+            println!("no finite steady state: nothing balances the input at any amplitude, so the response grows without bound (no damping at resonance)");
         }
         None => {
             let n = set.roots.len();

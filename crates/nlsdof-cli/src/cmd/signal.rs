@@ -21,7 +21,7 @@ pub struct Common {
     /// Amplitude, m/s^2 zero-to-peak.
     #[arg(long, allow_hyphen_values = true)]
     pub amplitude: f64,
-    /// Sampling frequency, Hz (> 0).
+    /// Sampling frequency, Hz (> 0); at most 1e10 samples in all (duration x fs).
     #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
     pub fs: f64,
     /// Output CSV (t,accel); written atomically.
@@ -88,7 +88,7 @@ pub enum Kind {
         f_min: f64,
         #[arg(long = "f-max", value_name = "HZ", allow_hyphen_values = true)]
         f_max: f64,
-        /// Number of steps (>= 2), f-min and f-max included.
+        /// Number of steps (2 to 1000000), f-min and f-max included.
         #[arg(long)]
         steps: usize,
         #[arg(long, value_enum, default_value_t = Direction::Up)]
@@ -229,8 +229,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
                     "--f-max {f_max} must be finite and > --f-min {f_min}"
                 )));
             }
-            if steps < 2 {
-                return Err(CliError::Usage(format!("--steps {steps}: need at least 2")));
+            if !(2..=nlsdof::stepped_sine::MAX_STEPS).contains(&steps) {
+                return Err(CliError::Usage(format!(
+                    "--steps {steps}: need 2 to {}",
+                    nlsdof::stepped_sine::MAX_STEPS
+                )));
             }
             let dw = match (dwell_cycles, dwell) {
                 (Some(c), None) => Dwell::Cycles(c),

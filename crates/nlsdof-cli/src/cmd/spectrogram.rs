@@ -72,7 +72,7 @@ pub struct Args {
     /// Overlap of consecutive segments, fraction of L in [0, 1).
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub overlap: f64,
-    /// FFT length (>= L, zero padding); default L.
+    /// FFT length (>= L, zero padding; at most 2^24 = 16777216, and at most 5e7 spectrogram values in all); default L.
     #[arg(long, value_name = "N")]
     pub nfft: Option<usize>,
     /// Segment mean removal.

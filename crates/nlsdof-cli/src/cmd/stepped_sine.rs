@@ -39,7 +39,7 @@ pub struct Args {
     /// Highest frequency, Hz.
     #[arg(long = "f-max", value_name = "HZ", allow_hyphen_values = true)]
     pub f_max: f64,
-    /// Number of frequency steps, linearly spaced, f-min and f-max included (>= 2).
+    /// Number of frequency steps, linearly spaced, f-min and f-max included (2 to 1000000).
     #[arg(long, value_name = "N")]
     pub steps: usize,
     /// Sweep direction.
@@ -57,7 +57,7 @@ pub struct Args {
     /// Keep every N-th simulated sample in --history.
     #[arg(long, value_name = "N", default_value_t = 16)]
     pub history_decimate: usize,
-    /// RK4 steps per input cycle.
+    /// RK4 steps per input cycle (16 to 100000).
     #[arg(long, value_name = "N", default_value_t = 64)]
     pub samples_per_cycle: usize,
     /// Settled when the estimated remaining transient is below this fraction of the amplitude.
@@ -124,10 +124,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
             a.f_min, a.f_max
         )));
     }
-    if a.steps < 2 {
+    if a.steps < 2 || a.steps > nlsdof::stepped_sine::MAX_STEPS {
         return Err(CliError::Usage(format!(
-            "--steps {}: need at least 2 frequency steps",
-            a.steps
+            "--steps {}: need 2 to {} frequency steps",
+            a.steps,
+            nlsdof::stepped_sine::MAX_STEPS
         )));
     }
     if a.history_decimate == 0 {

@@ -58,6 +58,66 @@ impl ResponseEquation {
         ])
     }
 
+    /// `P(x) − 1` in the scaled variable `y = x e^{−u}`, with `u` chosen so
+    /// that no coefficient overflows or underflows: `(power sum in y, u)`.
+    /// `u = 0` (the plain [`Self::power_sum`]) whenever its coefficients are
+    /// representable, which is every physically sensible case; extreme
+    /// parameters (e.g. `k_r = 1e300`, whose `s₁²` overflows) are scaled.
+    pub fn scaled_power_sum(&self) -> (PowerSum, f64) {
+        let (s0, s1, d0, d1, r, e) = (self.s0, self.s1, self.d0, self.d1, self.rho, self.eta);
+        let ln = |v: f64| v.abs().ln();
+        // (exponent, sign, ln|coefficient|) of each nonzero term
+        let mut terms: Vec<(f64, f64, f64)> = vec![(0.0, -1.0, 0.0)];
+        if s0 != 0.0 || d0 != 0.0 {
+            terms.push((2.0, 1.0, ln_sum_sq(s0, d0)));
+        }
+        if s0 != 0.0 && s1 != 0.0 {
+            terms.push((2.0 + r, (s0 * s1).signum(), 2f64.ln() + ln(s0) + ln(s1)));
+        }
+        if s1 != 0.0 {
+            terms.push((2.0 + 2.0 * r, 1.0, 2.0 * ln(s1)));
+        }
+        if d0 != 0.0 && d1 != 0.0 {
+            terms.push((2.0 + e, (d0 * d1).signum(), 2f64.ln() + ln(d0) + ln(d1)));
+        }
+        if d1 != 0.0 {
+            terms.push((2.0 + 2.0 * e, 1.0, 2.0 * ln(d1)));
+        }
+        let worst = |u: f64| {
+            terms
+                .iter()
+                .map(|&(ex, _, l)| (l + ex * u).abs())
+                .fold(0.0, f64::max)
+        };
+        let u = if worst(0.0) < 600.0 || terms.iter().any(|t| !t.2.is_finite()) {
+            0.0
+        } else {
+            // worst(u) is convex (max of |affine|): golden-section search
+            let (mut a, mut b) = (-1500.0f64, 1500.0f64);
+            let g = 0.5 * (5f64.sqrt() - 1.0);
+            for _ in 0..200 {
+                let (c, d) = (b - g * (b - a), a + g * (b - a));
+                if worst(c) <= worst(d) {
+                    b = d;
+                } else {
+                    a = c;
+                }
+            }
+            0.5 * (a + b)
+        };
+        if u == 0.0 {
+            return (self.power_sum(), 0.0);
+        }
+        (
+            PowerSum::new(
+                terms
+                    .iter()
+                    .map(|&(ex, sign, l)| (ex, sign * (l + ex * u).exp())),
+            ),
+            u,
+        )
+    }
+
     /// `(S, D, ρ s₁ x^ρ, η d₁ x^η)` at `t = ln x`.
     #[inline]
     fn parts(&self, t: f64) -> (f64, f64, f64, f64) {
@@ -153,6 +213,13 @@ impl ResponseEquation {
         (lo, hi)
     }
 
+    /// `P(x) < 1` at the largest representable amplitude: with no root,
+    /// the response has no finite steady state (it grows without bound).
+    pub fn grows_without_bound(&self) -> bool {
+        let (_, hi) = self.safe_range();
+        !(self.ln_p(hi) >= 0.0)
+    }
+
     /// Every positive root `x` of `P(x) = 1`, increasing. Exact isolation
     /// (no grid); each root polished to machine precision in `ln x`.
     ///
@@ -171,15 +238,23 @@ impl ResponseEquation {
     /// [`Self::critical_points_t`]; empty when the root count is settled by
     /// Descartes' rule, in which case no fold can be near), in `t = ln x`.
     pub fn roots_and_critical_points_t(&self) -> Result<(Vec<f64>, Vec<f64>), SolveError> {
-        let ps = self.power_sum();
+        let (ps, u) = self.scaled_power_sum();
         if ps.sign_changes() == 0 {
             return Ok((Vec::new(), Vec::new()));
         }
-        let (lo, hi) = self.search_range(&ps)?;
+        let (lo, hi) = self.search_range(&ps, u)?;
         let e_min = ps.exponents()[0];
-        let top = |t: f64| self.ln_p(t);
-        let second = |t: f64| self.level1(t, e_min);
-        Ok(ps.roots_and_critical_points_in(lo, hi, Some(&top), Some(&second)))
+        let top = |t: f64| self.ln_p(t + u);
+        let second = |t: f64| self.level1(t + u, e_min);
+        let (mut roots, mut crit) =
+            ps.roots_and_critical_points_in(lo, hi, Some(&top), Some(&second));
+        if u != 0.0 {
+            roots
+                .iter_mut()
+                .chain(crit.iter_mut())
+                .for_each(|t| *t += u);
+        }
+        Ok((roots, crit))
     }
 
     /// Roots, critical points and inflection points (all in `t = ln x`, as
@@ -189,23 +264,26 @@ impl ResponseEquation {
     /// `ln P = 0`; a pair of critical points is born where the slope at an
     /// inflection point touches zero. Used by the fold search.
     pub fn fold_indicators(&self) -> Result<FoldIndicators, SolveError> {
-        let ps = self.power_sum();
+        let (ps, u) = self.scaled_power_sum();
         if ps.sign_changes() == 0 {
             return Ok(FoldIndicators::default());
         }
-        let (lo, hi) = self.search_range(&ps)?;
+        let (lo, hi) = self.search_range(&ps, u)?;
         let e_min = ps.exponents()[0];
-        let top = |t: f64| self.ln_p(t);
-        let second = |t: f64| self.level1(t, e_min);
+        let top = |t: f64| self.ln_p(t + u);
+        let second = |t: f64| self.level1(t + u, e_min);
         let mut levels = [Vec::new(), Vec::new()];
         let roots = ps.roots_with_levels_in(lo, hi, Some(&top), Some(&second), &mut levels);
         let [crit, infl] = levels;
         Ok(FoldIndicators {
-            roots,
-            critical: crit.into_iter().map(|t| (t, self.ln_p(t))).collect(),
+            roots: roots.into_iter().map(|t| t + u).collect(),
+            critical: crit
+                .into_iter()
+                .map(|t| (t + u, self.ln_p(t + u)))
+                .collect(),
             inflection: infl
                 .into_iter()
-                .map(|t| (t, self.level1(t, e_min)))
+                .map(|t| (t + u, self.level1(t + u, e_min)))
                 .collect(),
         })
     }
@@ -214,38 +292,43 @@ impl ResponseEquation {
     /// search range: the local extrema between which roots appear and vanish
     /// in pairs. A fold is a critical point where `P = 1`.
     pub fn critical_points_t(&self) -> Result<Vec<f64>, SolveError> {
-        let ps = self.power_sum();
+        let (ps, u) = self.scaled_power_sum();
         if ps.sign_changes() < 2 {
             return Ok(Vec::new());
         }
-        let (lo, hi) = self.search_range(&ps)?;
+        let (lo, hi) = self.search_range(&ps, u)?;
         let e_min = ps.exponents()[0];
-        let second = |t: f64| self.level1(t, e_min);
+        let second = |t: f64| self.level1(t + u, e_min);
         Ok(ps
             .reduced_derivative()
-            .roots_in(lo, hi, Some(&second), None))
+            .roots_in(lo, hi, Some(&second), None)
+            .into_iter()
+            .map(|t| t + u)
+            .collect())
     }
 
-    fn search_range(&self, ps: &PowerSum) -> Result<(f64, f64), SolveError> {
+    /// Root search range in `t_y = ln y = ln x − u` of the scaled power sum.
+    fn search_range(&self, ps: &PowerSum, u: f64) -> Result<(f64, f64), SolveError> {
         let (blo, bhi) = ps.root_bounds().unwrap_or((0.0, 0.0));
         let (blo, bhi) = (blo - 0.5, bhi + 0.5);
         let (slo, shi) = self.safe_range();
+        let (slo, shi) = (slo - u, shi - u);
         let (sgn_lo, sgn_hi) = ps.asymptotic_signs();
         let (mut lo, mut hi) = (blo, bhi);
         if bhi > shi {
             hi = shi;
-            if self.ln_p(hi).signum() != sgn_hi {
+            if self.ln_p(hi + u).signum() != sgn_hi {
                 return Err(SolveError::Overflow {
-                    amplitude: hi.exp(),
+                    amplitude: (hi + u).exp(),
                     omega: f64::NAN,
                 });
             }
         }
         if blo < slo {
             lo = slo;
-            if self.ln_p(lo).signum() != sgn_lo {
+            if self.ln_p(lo + u).signum() != sgn_lo {
                 return Err(SolveError::Overflow {
-                    amplitude: lo.exp(),
+                    amplitude: (lo + u).exp(),
                     omega: f64::NAN,
                 });
             }

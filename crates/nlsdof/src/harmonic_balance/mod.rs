@@ -95,6 +95,11 @@ pub enum NoMotion {
     /// No positive root for another reason (e.g. η < −1, where the damping
     /// force grows without bound as the amplitude goes to zero).
     NoRoot,
+    /// No finite steady state: the restoring and damping forces never
+    /// balance the input at any amplitude (`P(x) < 1` for all `x`), so the
+    /// response grows without bound, e.g. an undamped linear model at its
+    /// natural frequency. Not sticking: the mass moves.
+    Unbounded,
 }
 
 /// All steady states at one (γ, Ω).
@@ -136,14 +141,17 @@ pub struct Jump {
 pub struct SweepPoint {
     /// Ω, rad/s.
     pub omega: f64,
-    /// a, m (0 when `sticking`).
+    /// a, m (0 when `sticking` or `unbounded`: no finite amplitude).
     pub amplitude: f64,
-    /// Phase lag, rad (0 when `sticking`).
+    /// Phase lag, rad (0 when `sticking` or `unbounded`).
     pub phase: f64,
     /// The followed state is stable (false only where no stable root exists).
     pub stable: bool,
-    /// No motion (Coulomb sticking or no root at all).
+    /// No motion (Coulomb sticking, or no root for another reason).
     pub sticking: bool,
+    /// No finite steady state ([`NoMotion::Unbounded`]): the response grows
+    /// without bound; never set together with `sticking`.
+    pub unbounded: bool,
 }
 
 /// Result of a stepped-sine sweep at one level.
@@ -283,6 +291,8 @@ impl ForcedResponse {
                 friction_accel: 4.0 / std::f64::consts::PI * self.model.kappa,
                 input_accel: self.gamma,
             }
+        } else if eq.grows_without_bound() {
+            NoMotion::Unbounded
         } else {
             NoMotion::NoRoot
         }

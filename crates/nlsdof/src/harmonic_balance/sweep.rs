@@ -164,16 +164,21 @@ fn point(r: &ForcedResponse, omega: f64, s: &SteadyState) -> SweepPoint {
         phase: s.phase,
         stable: s.stable,
         sticking: false,
+        unbounded: false,
     }
 }
 
-fn sticking_point(omega: f64) -> SweepPoint {
+/// A step without a steady state: sticking (no motion), or no finite
+/// steady state (`unbounded`, unstable) when the response grows without bound.
+fn sticking_point(omega: f64, reason: Option<NoMotion>) -> SweepPoint {
+    let unbounded = reason == Some(NoMotion::Unbounded);
     SweepPoint {
         omega,
         amplitude: 0.0,
         phase: 0.0,
-        stable: true,
-        sticking: true,
+        stable: !unbounded,
+        sticking: !unbounded,
+        unbounded,
     }
 }
 
@@ -271,6 +276,7 @@ fn fast_sweep(
             phase,
             stable,
             sticking: false,
+            unbounded: false,
         });
         hist = [(w, t), hist[0], hist[1]];
     }
@@ -397,6 +403,7 @@ fn unique_root(
         phase,
         stable,
         sticking: false,
+        unbounded: false,
     })
 }
 
@@ -516,7 +523,7 @@ fn general_sweep(
         let set = r.steady_states(w).map_err(|e| with_omega(e, w))?;
         let roots = set.roots;
         if roots.is_empty() {
-            points.push(sticking_point(w));
+            points.push(sticking_point(w, set.no_motion));
             rank = None;
         } else {
             let j = match rank {

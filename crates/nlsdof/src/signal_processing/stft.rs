@@ -146,6 +146,15 @@ pub enum StftError {
     BadOverlap { overlap: f64 },
     #[error("FFT length {nfft} must be >= the segment length {segment_len}")]
     BadNfft { nfft: usize, segment_len: usize },
+    #[error("FFT length {nfft} is too large: at most {max} (2^24)")]
+    NfftTooLarge { nfft: usize, max: usize },
+    #[error("the spectrogram would have {n_segments} segments x {n_freq} bins = {cells} values, more than {max}: use fewer segments or a shorter FFT")]
+    TooLarge {
+        n_segments: usize,
+        n_freq: usize,
+        cells: u128,
+        max: u128,
+    },
     #[error("spectrograms have different shapes: measured {measured_time} segments x {measured_freq} bins, model {model_time} x {model_freq} (records of different length or options?)")]
     ShapeMismatch {
         measured_time: usize,
@@ -180,6 +189,11 @@ pub enum StftError {
     #[error("the measured spectrogram is zero everywhere: Eq 33 divides by it")]
     ZeroMeasured,
 }
+
+/// Largest FFT length (2^24; the FFT buffers are allocated up front).
+pub const MAX_NFFT: usize = 1 << 24;
+/// Largest spectrogram (segments x bins) values: 5e7, 400 MB of f64.
+pub const MAX_CELLS: u128 = 50_000_000;
 
 /// STFT options. Build with [`StftOptions::paper`] or
 /// [`StftOptions::with_segments`] and adjust fields.
@@ -247,6 +261,12 @@ impl StftOptions {
                 segment_len: l,
             });
         }
+        if nfft > MAX_NFFT {
+            return Err(StftError::NfftTooLarge {
+                nfft,
+                max: MAX_NFFT,
+            });
+        }
         if n_samples == 0 {
             return Err(StftError::Empty);
         }
@@ -258,11 +278,21 @@ impl StftOptions {
         }
         let noverlap = ((self.overlap * l as f64).round() as usize).min(l - 1);
         let hop = l - noverlap;
+        let n_segments = 1 + (n_samples - l) / hop;
+        let cells = n_segments as u128 * (nfft / 2 + 1) as u128;
+        if cells > MAX_CELLS {
+            return Err(StftError::TooLarge {
+                n_segments,
+                n_freq: nfft / 2 + 1,
+                cells,
+                max: MAX_CELLS,
+            });
+        }
         Ok(StftLayout {
             segment_len: l,
             noverlap,
             hop,
-            n_segments: 1 + (n_samples - l) / hop,
+            n_segments,
             nfft,
             n_freq: nfft / 2 + 1,
             used_samples: (n_samples - l) / hop * hop + l,

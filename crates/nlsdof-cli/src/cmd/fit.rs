@@ -355,30 +355,10 @@ pub fn apply_fix_free(
     Ok(mass)
 }
 
-/// Reads a bounds TOML file (`name = [min, max]`).
+/// Reads a bounds TOML file (`name = [min, max]`) with nlsdof-io's reader
+/// (the fuzzed one).
 pub fn parse_bounds(path: &Path) -> Result<Vec<(String, f64, f64)>, CliError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| CliError::Usage(format!("cannot read {}: {e}", path.display())))?;
-    let table: toml::Table = toml::from_str(&text)
-        .map_err(|e| CliError::Usage(format!("{}: {}", path.display(), e.message())))?;
-    let mut out = Vec::new();
-    for (name, v) in table {
-        let arr = v.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
-            CliError::Usage(format!("{}: {name} must be [min, max]", path.display()))
-        })?;
-        let num = |x: &toml::Value| x.as_float().or_else(|| x.as_integer().map(|i| i as f64));
-        let (lo, hi) = match (num(&arr[0]), num(&arr[1])) {
-            (Some(a), Some(b)) => (a, b),
-            _ => {
-                return Err(CliError::Usage(format!(
-                    "{}: {name} bounds must be numbers",
-                    path.display()
-                )))
-            }
-        };
-        out.push((name, lo, hi));
-    }
-    Ok(out)
+    Ok(nlsdof_io::bounds_file::read_bounds(path)?)
 }
 
 /// Applies a bounds TOML file (`name = [min, max]`).
@@ -989,6 +969,18 @@ fn run_identify(
             args.starts
         )));
     }
+    // every output can be written, and no file is named twice, before any work
+    let mut targets: Vec<(&str, &Path)> = Vec::new();
+    if let Some(p) = &args.out {
+        targets.push(("--out", p));
+    }
+    if let Some(p) = &args.plot {
+        targets.push(("--plot", p));
+    }
+    if let Some(p) = &args.landscape {
+        targets.push(("--landscape", p));
+    }
+    nlsdof_io::atomic::check_targets(&targets)?;
     let landscape_kind = match &args.landscape {
         None => None,
         Some(p) => Some(super::landscape_plot::kind_of(p)?),

@@ -262,7 +262,7 @@ pub fn check_targets(targets: &[(&str, &Path)]) -> Result<(), IoError> {
             return Err(write_error(
                 path,
                 std::io::ErrorKind::AlreadyExists,
-                format!("given for both {other} and {label}; give each output its own file"),
+                format!("given for both {other} and {label}: one file for two outputs; give each output its own file"),
             ));
         }
         seen.push((key, label));

@@ -575,7 +575,7 @@ pub fn identification_text(id: &Identification) -> String {
     if let Some(p) = id.phase {
         writeln!(
             s,
-            "phase convention: {} + {:.2} deg{} (measured phase = {}displacement lag + offset)",
+            "phase convention: {} {:+.2} deg{} (measured phase = {}displacement lag + offset)",
             if p.sign > 0.0 { "lag" } else { "lead" },
             p.offset.to_degrees(),
             if p.delay != 0.0 {

@@ -130,10 +130,10 @@ pub struct Args {
     #[arg(long)]
     pub integer: bool,
     /// Extra global-search starts (Latin hypercube) per refined landscape candidate
-    /// (1 = none: the local fit from the equation-error start). With --integer or
-    /// --sign auto: starts of the classic multistart.
-    #[arg(long, default_value_t = 1)]
-    pub starts: usize,
+    /// (default 1 = none: the local fit from the equation-error start). With --integer or
+    /// --sign auto: starts of the classic multistart (default 32).
+    #[arg(long)]
+    pub starts: Option<usize>,
     /// Do not use the phase columns (default: used when every curve has phases, with
     /// the phase convention detected from the data).
     #[arg(long = "no-phase")]
@@ -500,7 +500,7 @@ pub fn plan_from_args(
         )));
     }
     plan.refine = args.refine;
-    plan.starts = args.starts;
+    plan.starts = args.starts.unwrap_or(1);
     plan.seed = args.seed;
     Ok((plan, mass))
 }
@@ -963,10 +963,10 @@ fn run_identify(
 ) -> Result<(), CliError> {
     let (plan, fix_mass) = plan_from_args(args, kind, sign)?;
     let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
-    if args.starts == 0 || args.starts > 100_000 {
+    let starts = args.starts.unwrap_or(1);
+    if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
-            "--starts {} is not allowed: use 1..=100000",
-            args.starts
+            "--starts {starts} is not allowed: use 1..=100000"
         )));
     }
     // every output can be written, and no file is named twice, before any work
@@ -1103,14 +1103,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let fix_mass = apply_fix_free(&mut spec, args.fix.as_deref(), args.free.as_deref())?;
     let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
-    if args.starts == 0 || args.starts > 100_000 {
+    let starts = args.starts.unwrap_or(32);
+    if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
-            "--starts {} is not allowed: use 1..=100000",
-            args.starts
+            "--starts {starts} is not allowed: use 1..=100000"
         )));
     }
     let opts = FitOptions {
-        starts: args.starts,
+        starts,
         seed: args.seed,
         ..FitOptions::default()
     };

@@ -445,10 +445,10 @@ pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
         ));
     }
     check_frequency_weight(args.pr.frequency_weight)?;
-    if args.starts == 0 || args.starts > 100_000 {
+    let starts = args.starts.unwrap_or(32);
+    if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
-            "--starts {} is not allowed: use 1..=100000",
-            args.starts
+            "--starts {starts} is not allowed: use 1..=100000"
         )));
     }
     let data = args.data.load_phase_resonance()?;
@@ -465,7 +465,7 @@ pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
         Ok(())
     };
     let opts = PrFitOptions {
-        starts: args.starts,
+        starts,
         seed: args.seed,
         frequency_weight: args.pr.frequency_weight,
         ..PrFitOptions::default()

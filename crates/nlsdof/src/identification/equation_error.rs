@@ -429,6 +429,37 @@ fn damping_positive(prep: &Prepared, f: &EquationErrorFit) -> bool {
     s > 0.0
 }
 
+/// The coefficient part of a point's two phase-form rows (real: α, β;
+/// imaginary: δ, κ; scaled as in the module docs) and the index of the
+/// first gain column.
+fn coefficient_rows(
+    p: &Point,
+    rho: f64,
+    eta: f64,
+    sc: &Scales,
+    terms: Terms,
+) -> ([f64; 6], [f64; 6], usize) {
+    let (fa, fd) = regressors(p, rho, eta, sc);
+    let wr = sc.omega_ref;
+    let k = p.sw / p.gamma;
+    let mut re = [0.0; 6];
+    let mut im = [0.0; 6];
+    let mut q = 0;
+    re[q] = k * p.a;
+    q += 1;
+    if terms.stiffness {
+        re[q] = k * fa;
+        q += 1;
+    }
+    im[q] = k * p.omega * p.a / wr;
+    q += 1;
+    if terms.damping {
+        im[q] = k * fd / wr;
+        q += 1;
+    }
+    (re, im, q)
+}
+
 /// Column layout of the phase system: α, β?, δ, κ?, then gain columns.
 fn layout(terms: Terms) -> (Vec<usize>, usize) {
     let mut cols = vec![ALPHA];
@@ -464,31 +495,15 @@ fn solve_phase_complex(
     let mut ls = SmallLs::new(n);
     let mut rows: Vec<([f64; 6], f64, [f64; 6], f64)> = Vec::with_capacity(prep.points.len());
     for p in &prep.points {
-        let (fa, fd) = regressors(p, rho, eta, sc);
         let th = sign * (p.psi - p.omega * delay);
         let (s, c) = th.sin_cos();
-        let k = p.sw / p.gamma;
-        let mut re = [0.0; 6];
-        let mut im = [0.0; 6];
-        let mut q = 0;
-        re[q] = k * p.a;
-        q += 1;
-        if terms.stiffness {
-            re[q] = k * fa;
-            q += 1;
-        }
-        im[q] = k * p.omega * p.a / wr;
-        q += 1;
-        if terms.damping {
-            im[q] = k * fd / wr;
-            q += 1;
-        }
+        let (mut re, mut im, q) = coefficient_rows(p, rho, eta, sc, terms);
         // G̃ = Gr + i Gi (unknowns scaled by 1/Ω_ref²: the rows are divided by Ω_ref²)
         re[q] = -p.sw * c / (wr * wr);
         re[q + 1] = p.sw * s / (wr * wr);
         im[q] = -p.sw * s / (wr * wr);
         im[q + 1] = -p.sw * c / (wr * wr);
-        let bre = k * p.omega * p.omega * p.a / (wr * wr);
+        let bre = p.sw / p.gamma * p.omega * p.omega * p.a / (wr * wr);
         ls.add(&re[..n], bre);
         ls.add(&im[..n], 0.0);
         rows.push((re, bre, im, 0.0));
@@ -586,26 +601,10 @@ fn solve_phase_known(
     let mut ls = SmallLs::new(n);
     let mut rows = Vec::with_capacity(prep.points.len());
     for p in &prep.points {
-        let (fa, fd) = regressors(p, rho, eta, sc);
         let phi = conv.lag(p.psi, p.omega);
         let (s, c) = phi.sin_cos();
-        let k = p.sw / p.gamma;
-        let mut re = [0.0; 6];
-        let mut im = [0.0; 6];
-        let mut q = 0;
-        re[q] = k * p.a;
-        q += 1;
-        if terms.stiffness {
-            re[q] = k * fa;
-            q += 1;
-        }
-        im[q] = k * p.omega * p.a / wr;
-        q += 1;
-        if terms.damping {
-            im[q] = k * fd / wr;
-            q += 1;
-        }
-        let mut bre = k * p.omega * p.omega * p.a / (wr * wr);
+        let (mut re, mut im, q) = coefficient_rows(p, rho, eta, sc, terms);
+        let mut bre = p.sw / p.gamma * p.omega * p.omega * p.a / (wr * wr);
         let mut bim = 0.0;
         match terms.gain {
             None => {

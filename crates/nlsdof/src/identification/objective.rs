@@ -656,6 +656,17 @@ pub fn model_response(
         .collect()
 }
 
+/// Wraps an angle to (−π, π] (kept here so that the objective does not
+/// depend on the equation-error module, which depends on it).
+fn wrap_angle(x: f64) -> f64 {
+    let y = x.rem_euclid(std::f64::consts::TAU);
+    if y > std::f64::consts::PI {
+        y - std::f64::consts::TAU
+    } else {
+        y
+    }
+}
+
 /// Evaluates Eq 31's residuals at θ, with the Jacobian if `jacobian`.
 pub fn evaluate(
     data: &Dataset,
@@ -721,7 +732,7 @@ pub fn evaluate_with_phase(
                 let k = (wp * c.weights[i]).sqrt() * c.amplitudes[i] / c.gamma;
                 let (a, phi) = am[i];
                 if a > 0.0 {
-                    residuals.push(k * super::equation_error::wrap(phi - ph[i]));
+                    residuals.push(k * wrap_angle(phi - ph[i]));
                 } else {
                     residuals.push(0.0);
                 }

@@ -500,7 +500,13 @@ pub fn plan_from_args(
         )));
     }
     plan.refine = args.refine;
-    plan.starts = args.starts.unwrap_or(1);
+    let starts = args.starts.unwrap_or(1);
+    if starts == 0 || starts > 100_000 {
+        return Err(CliError::Usage(format!(
+            "--starts {starts} is not allowed: use 1..=100000"
+        )));
+    }
+    plan.starts = starts;
     plan.seed = args.seed;
     Ok((plan, mass))
 }
@@ -655,6 +661,29 @@ fn status_name(s: Status) -> &'static str {
     }
 }
 
+/// The `--out` model file of a fit: a header (model, cost, a note when the
+/// fit is not trustworthy, the forcing gain, the mass convention) and the
+/// physical model for `mass` (1 kg when not given).
+pub fn model_file_text(res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
+    let model = physical(res, mass.unwrap_or(1.0))?;
+    let mut text = format!(
+        "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
+        res.kind,
+        res.cost,
+        if res.warning().is_some() {
+            " (NOT CONVERGED or not identifiable: see the fit report)"
+        } else {
+            ""
+        },
+        res.theta[GAIN]
+    );
+    if mass.is_none() {
+        text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
+    }
+    text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
+    Ok(text)
+}
+
 /// Physical model for mass `m` (β, κ scaled; gain is not part of it).
 pub fn physical(res: &FitResult, m: f64) -> Result<Model, CliError> {
     Ok(res.model().to_physical(m)?)
@@ -729,8 +758,16 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         .iter()
         .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta}))
         .collect();
+    let stiffness_sign = (res.status[BETA] != Status::Absent).then(|| {
+        if res.theta[BETA] < 0.0 {
+            "softening"
+        } else {
+            "hardening"
+        }
+    });
     Ok(json!({
         "model": res.kind.name(),
+        "stiffness_sign": stiffness_sign,
         "converged": res.converged,
         "at_bounds": res.at_bounds,
         "unidentifiable": res.unidentifiable,
@@ -963,12 +1000,6 @@ fn run_identify(
 ) -> Result<(), CliError> {
     let (plan, fix_mass) = plan_from_args(args, kind, sign)?;
     let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
-    let starts = args.starts.unwrap_or(1);
-    if starts == 0 || starts > 100_000 {
-        return Err(CliError::Usage(format!(
-            "--starts {starts} is not allowed: use 1..=100000"
-        )));
-    }
     // every output can be written, and no file is named twice, before any work
     let mut targets: Vec<(&str, &Path)> = Vec::new();
     if let Some(p) = &args.out {
@@ -994,20 +1025,7 @@ fn run_identify(
     // render everything first, then commit the files
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(out) = &args.out {
-        let m = mass.unwrap_or(1.0);
-        let model = physical(res, m)?;
-        let mut text = format!(
-            "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
-            res.kind,
-            res.cost,
-            if res.warning().is_some() { " (NOT CONVERGED or not identifiable: see the fit report)" } else { "" },
-            res.theta[GAIN]
-        );
-        if mass.is_none() {
-            text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
-        }
-        text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
-        files.push((out.clone(), text.into_bytes()));
+        files.push((out.clone(), model_file_text(res, mass)?.into_bytes()));
     }
     if let Some(p) = &args.plot {
         files.push((p.clone(), fit_svg(&id.data, res).into_bytes()));
@@ -1015,36 +1033,20 @@ fn run_identify(
     if let (Some(p), Some(k)) = (&args.landscape, landscape_kind) {
         files.push((p.clone(), super::landscape_plot::render(&id, k)?));
     }
-    for (i, (p, _)) in files.iter().enumerate() {
-        if files[..i].iter().any(|(q, _)| q == p) {
-            return Err(CliError::Usage(format!(
-                "{} is given for two outputs",
-                p.display()
-            )));
-        }
-    }
     for (p, bytes) in &files {
         nlsdof_io::atomic::write_atomic(p, bytes)?;
     }
     if args.json {
         let mut v = result_json(&id.data, res, mass)?;
-        if res.status[BETA] != Status::Absent {
-            v["stiffness_sign"] = json!(if res.theta[BETA] < 0.0 {
-                "softening"
-            } else {
-                "hardening"
-            });
-        }
         v["jump_weight"] = json!(id.jump_weight);
         v["identification"] = identification_json(&id);
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
-        let mut s = String::new();
-        if let Some(w) = res.warning() {
-            writeln!(s, "{w}").ok();
-        }
+        // the fit report first (its first line is the warning, if any),
+        // then the stages that led to it
+        let mut s = result_text(&id.data, res, mass)?;
+        s.push('\n');
         s.push_str(&identification_text(&id));
-        s.push_str(&result_text(&id.data, res, mass)?);
         print!("{s}");
     }
     Ok(())
@@ -1166,30 +1168,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     // write --out first (atomic) so a failure leaves nothing behind
     if let Some(out) = &args.out {
-        let m = mass.unwrap_or(1.0);
-        let model = physical(&res, m)?;
-        let mut text = format!(
-            "# fitted by `nlsdof fit`, model {}, cost {:.6e}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
-            res.kind, res.cost, res.theta[GAIN]
-        );
-        if mass.is_none() {
-            text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
-        }
-        text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
-        nlsdof_io::atomic::write_atomic(out, text.as_bytes())?;
+        nlsdof_io::atomic::write_atomic(out, model_file_text(&res, mass)?.as_bytes())?;
     }
     if let Some(p) = &args.plot {
         nlsdof_io::atomic::write_atomic(p, fit_svg(&data, &res).as_bytes())?;
     }
     if args.json {
         let mut v = result_json(&data, &res, mass)?;
-        if res.status[BETA] != Status::Absent {
-            v["stiffness_sign"] = json!(if res.theta[BETA] < 0.0 {
-                "softening"
-            } else {
-                "hardening"
-            });
-        }
         if let Some(t) = sign_trials_json(&sign_trials) {
             v["sign_auto"] = t;
         }

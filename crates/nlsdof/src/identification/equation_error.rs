@@ -824,15 +824,7 @@ pub fn solve_magnitude(
         }
         let (x, null) = ls.solve();
         if x.is_none() {
-            let mut cols = vec![ALPHA];
-            if terms.stiffness {
-                cols.push(BETA);
-            }
-            cols.push(DELTA);
-            if terms.damping {
-                cols.push(KAPPA);
-            }
-            unid = names_of(&cols, &null);
+            unid = names_of(&layout(terms).0, &null);
         }
     }
     Ok((

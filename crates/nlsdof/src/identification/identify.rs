@@ -446,12 +446,7 @@ pub fn identify(
         .best()
         .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
     let best_ee = land.fit_at(bi, bj).expect("best node solved").clone();
-    if !best_ee.unidentifiable.is_empty() && land.minima.len() == 1 {
-        return Err(EquationErrorError::RankDeficient {
-            names: best_ee.unidentifiable.clone(),
-        }
-        .into());
-    }
+    // (nodes the data cannot separate are not in the landscape's minima)
     let phase_conv = best_ee.phase;
     // gain decision
     let mut gain_test = None;

@@ -452,23 +452,7 @@ fn text_output(
                 "  no stable state    at {unstable} steps (followed state unstable)"
             );
         }
-        if l.sweep.jumps.is_empty() {
-            let _ = writeln!(s, "  jumps              none");
-        }
-        for j in &l.sweep.jumps {
-            let _ = writeln!(
-                s,
-                "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
-                hz(j.omega),
-                j.amplitude_before,
-                j.amplitude_after,
-                if j.amplitude_after > j.amplitude_before {
-                    "up"
-                } else {
-                    "down"
-                }
-            );
-        }
+        jumps_text(&mut s, &l.sweep.jumps);
         if l.sweep.folds.is_empty() {
             let _ = writeln!(s, "  folds              none in the band");
         }
@@ -500,4 +484,26 @@ fn text_output(
         }
     }
     s
+}
+
+/// The summary lines of a sweep's jumps (shared by the first-order and
+/// multi-harmonic `frf` text output).
+pub fn jumps_text(s: &mut String, jumps: &[nlsdof::Jump]) {
+    if jumps.is_empty() {
+        let _ = writeln!(s, "  jumps              none");
+    }
+    for j in jumps {
+        let _ = writeln!(
+            s,
+            "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
+            hz(j.omega),
+            j.amplitude_before,
+            j.amplitude_after,
+            if j.amplitude_after > j.amplitude_before {
+                "up"
+            } else {
+                "down"
+            }
+        );
+    }
 }

@@ -359,23 +359,7 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
                 "  no stable state    at {unstable} steps (followed state unstable)"
             );
         }
-        if l.sweep.jumps.is_empty() {
-            let _ = writeln!(s, "  jumps              none");
-        }
-        for j in &l.sweep.jumps {
-            let _ = writeln!(
-                s,
-                "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
-                hz(j.omega),
-                j.amplitude_before,
-                j.amplitude_after,
-                if j.amplitude_after > j.amplitude_before {
-                    "up"
-                } else {
-                    "down"
-                }
-            );
-        }
+        super::frf::jumps_text(&mut s, &l.sweep.jumps);
         if l.sweep.folds.is_empty() {
             let _ = writeln!(s, "  folds              none on the branch");
         }

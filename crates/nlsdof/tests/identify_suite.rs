@@ -9,6 +9,13 @@
 //! * every fitted curve is within 1.5 % of the noise-free truth curve
 //!   (RMS of `a_model − a_true` over the curve, relative to its peak).
 //!
+//! At 1 % noise the data of many cases do not carry the information to pin
+//! an exponent to 0.1: the Cramér–Rao bound (`support::synthetic::exponent_crlb`,
+//! the smallest spread of any unbiased estimator) is wider. Each case's
+//! bound is printed, and a second criterion, *efficient*, accepts an
+//! exponent within `max(0.1, 2.58 σ_CRLB)` (where 99 % of the estimates of
+//! an ideal estimator fall), the other criteria unchanged.
+//!
 //! CI runs the first 24 cases; the full 100 run with
 //! `cargo test --release -p nlsdof --test identify_suite -- --ignored`.
 
@@ -16,7 +23,7 @@ mod support;
 
 use nlsdof::identification::models::*;
 use nlsdof::identification::{identify, FitPlan, ModelKind};
-use support::synthetic::{case, Case};
+use support::synthetic::{case, exponent_crlb, Case};
 
 struct Outcome {
     /// The criterion (exponents within 0.1).
@@ -28,12 +35,18 @@ struct Outcome {
     /// α, δ and the curves within their limits (the fit found the data's
     /// optimum; exponents not judged).
     fitted: bool,
+    /// Exponents within `max(0.1, 2.58 σ_CRLB)`, the rest as `pass`.
+    efficient: bool,
+    /// The data allow the criterion: `1.96 σ_CRLB ≤ 0.1` for both.
+    informative: bool,
     line: String,
 }
 
 fn run(c: &Case) -> Outcome {
     let plan = FitPlan::new(ModelKind::Generalised);
     let t = &c.truth;
+    let (sd_rho, sd_eta) = exponent_crlb(c).unwrap_or((f64::INFINITY, f64::INFINITY));
+    let informative = 1.96 * sd_rho <= 0.1 && 1.96 * sd_eta <= 0.1;
     let res = match identify(&c.data, &plan, &|| {}) {
         Ok(r) => r,
         Err(e) => {
@@ -41,6 +54,8 @@ fn run(c: &Case) -> Outcome {
                 pass: false,
                 consistent: false,
                 fitted: false,
+                efficient: false,
+                informative,
                 line: format!("{}: ERROR {e}", c.description),
             }
         }
@@ -78,11 +93,15 @@ fn run(c: &Case) -> Outcome {
     let pass = d_rho <= 0.1 && d_eta <= 0.1 && rest;
     let consistent =
         (d_rho <= 0.1 || in_ci("rho", RHO)) && (d_eta <= 0.1 || in_ci("eta", ETA)) && rest;
+    let efficient =
+        d_rho <= 0.1f64.max(2.58 * sd_rho) && d_eta <= 0.1f64.max(2.58 * sd_eta) && rest;
     let line = format!(
-        "{}: {} | rho {:.3} (d {:.3}) eta {:.3} (d {:.3}) alpha {:+.3}% delta {:+.2}%{} curves {:.3}% | gain {} phase {} {}",
+        "{}: {} | rho {:.3} (d {:.3}, CRLB sd {:.3}) eta {:.3} (d {:.3}, CRLB sd {:.3}) alpha {:+.3}% delta {:+.2}%{} curves {:.3}% | gain {} phase {} {}",
         c.description,
         if pass {
             "pass"
+        } else if efficient {
+            "FAIL (exponent within 2.58 CRLB sd)"
         } else if consistent {
             "FAIL (exponent within its 95 % interval)"
         } else {
@@ -90,8 +109,10 @@ fn run(c: &Case) -> Outcome {
         },
         th[RHO],
         d_rho,
+        sd_rho,
         th[ETA],
         d_eta,
+        sd_eta,
         100.0 * (th[ALPHA] / t[ALPHA] - 1.0),
         100.0 * (th[DELTA] / t[DELTA] - 1.0),
         if delta_in_ci { " (in CI)" } else { "" },
@@ -109,12 +130,24 @@ fn run(c: &Case) -> Outcome {
         pass,
         consistent,
         fitted: rest,
+        efficient,
+        informative,
         line,
     }
 }
 
-/// (strict passes, consistent passes, fitted, cases)
-fn suite(seeds: std::ops::Range<u64>) -> (usize, usize, usize, usize) {
+/// Counts of a suite run.
+struct Tally {
+    n: usize,
+    passed: usize,
+    consistent: usize,
+    fitted: usize,
+    efficient: usize,
+    informative: usize,
+    passed_informative: usize,
+}
+
+fn suite(seeds: std::ops::Range<u64>) -> Tally {
     use rayon::prelude::*;
     let n = seeds.end - seeds.start;
     let outcomes: Vec<Outcome> = seeds
@@ -125,44 +158,72 @@ fn suite(seeds: std::ops::Range<u64>) -> (usize, usize, usize, usize) {
     let mut passed = 0;
     let mut consistent = 0;
     let mut fitted = 0;
+    let mut efficient = 0;
+    let mut informative = 0;
+    let mut passed_informative = 0;
     for o in &outcomes {
         println!("{}", o.line);
         passed += usize::from(o.pass);
         consistent += usize::from(o.consistent);
         fitted += usize::from(o.fitted);
+        efficient += usize::from(o.efficient);
+        informative += usize::from(o.informative);
+        passed_informative += usize::from(o.informative && o.pass);
     }
     let failed: Vec<&String> = outcomes
         .iter()
         .filter(|o| !o.pass)
         .map(|o| &o.line)
         .collect();
-    println!("\nsynthetic suite: {passed} of {n} cases pass (exponents within 0.1); {consistent} of {n} with exponents within 0.1 or inside their 95 % interval; {fitted} of {n} with alpha, delta and the curves within their limits");
+    println!("\nsynthetic suite: {passed} of {n} cases pass (exponents within 0.1); {consistent} of {n} with exponents within 0.1 or inside their 95 % interval; {efficient} of {n} within max(0.1, 2.58 CRLB sd); {fitted} of {n} with alpha, delta and the curves within their limits");
+    println!("the data allow exponents within 0.1 (1.96 CRLB sd <= 0.1 for both) in {informative} of {n} cases; {passed_informative} of those pass");
     if !failed.is_empty() {
         println!("failures:");
         for f in failed {
             println!("  {f}");
         }
     }
-    (passed, consistent, fitted, n as usize)
+    Tally {
+        n: n as usize,
+        passed,
+        consistent,
+        fitted,
+        efficient,
+        informative,
+        passed_informative,
+    }
 }
 
 #[test]
 fn synthetic_suite_ci_subset() {
-    let (passed, consistent, fitted, n) = suite(0..24);
-    // Measured (docs/identification.md): on every case the default fit
-    // reaches the data's optimum (alpha, delta, curves), but the issue's
-    // exponent criterion (within 0.1) is met on 6 of these 24 only: at 1 %
-    // noise the data do not pin high exponents to 0.1. These floors guard
-    // against regressions; the 97 % is asserted by the full suite.
-    println!("strict {passed}/{n}, consistent {consistent}/{n}, fitted {fitted}/{n}");
-    assert_eq!(fitted, n, "{fitted} of {n} fitted");
-    assert!(consistent >= 19, "{consistent} of {n} consistent");
-    assert!(passed >= 6, "{passed} of {n} strict");
+    let t = suite(0..24);
+    let n = t.n;
+    // Measured (docs/identification.md): the default fit reaches the data's
+    // optimum (alpha, delta, curves) on all 24 and is within 2.58 CRLB sd
+    // of the true exponents on 23; the exponent criterion (within
+    // 0.1) holds on 9 only, since at 1 % noise the data of 22 of these 24
+    // cases do not pin both exponents to 0.1 (1.96 CRLB sd > 0.1). Floors guard against
+    // regressions; the 97 % is asserted by the full suites.
+    println!(
+        "strict {}/{n}, consistent {}/{n}, efficient {}/{n}, fitted {}/{n}",
+        t.passed, t.consistent, t.efficient, t.fitted
+    );
+    assert_eq!(t.fitted, n, "{} of {n} fitted", t.fitted);
+    assert!(t.efficient >= 23, "{} of {n} efficient", t.efficient);
+    assert!(t.consistent >= 22, "{} of {n} consistent", t.consistent);
+    assert!(t.passed >= 8, "{} of {n} strict", t.passed);
 }
 
 #[test]
 #[ignore = "full suite (100 cases): cargo test --release -p nlsdof --test identify_suite -- --ignored"]
 fn synthetic_suite_full() {
-    let (passed, _, _, n) = suite(0..100);
-    assert!(passed >= 97, "{passed} of {n} passed");
+    let t = suite(0..100);
+    assert!(t.passed >= 97, "{} of {} passed", t.passed, t.n);
+}
+
+#[test]
+#[ignore = "full suite (100 cases), efficiency criterion: cargo test --release -p nlsdof --test identify_suite -- --ignored"]
+fn synthetic_suite_full_efficiency() {
+    let t = suite(0..100);
+    assert!(t.efficient >= 97, "{} of {} efficient", t.efficient, t.n);
 }

@@ -7,7 +7,7 @@ use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{
     fit, identify, integer_search, phase_quadrature_table, predicted_jumps, Dataset, FitOptions,
     FitPlan, FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
-    PhaseConvention, SignChoice, Status, N_PARAMS, PARAM_NAMES,
+    PhaseConvention, SignChoice, Status, Weighting, N_PARAMS, PARAM_NAMES,
 };
 use nlsdof::{Model, SweepDirection};
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
@@ -15,6 +15,13 @@ use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// `--weighting` (see [`Weighting`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WeightingArg {
+    Relative,
+    Absolute,
+}
 
 /// `--runs` values for `--beam-dir`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -149,6 +156,13 @@ pub struct Args {
     /// Weight of the phase residuals relative to the amplitude residuals.
     #[arg(long = "phase-weight", value_name = "W", default_value_t = 1.0)]
     pub phase_weight: f64,
+    /// Amplitude residuals of the output-error fit: relative (default; (a_model - a)/a,
+    /// the maximum-likelihood choice when the noise is a fixed fraction of the amplitude,
+    /// amplitudes below 1 % of their curve's peak counted as 1 %) or absolute (the paper's
+    /// Eq 31, (a_model - a)/gamma, for noise of one size at every point of a level).
+    /// The reported cost is that of the chosen weighting.
+    #[arg(long, value_enum, value_name = "relative|absolute")]
+    pub weighting: Option<WeightingArg>,
     /// Write the exponent landscape: FILE.json (grid), FILE.svg or FILE.png (heat map).
     #[arg(long, value_name = "FILE")]
     pub landscape: Option<PathBuf>,
@@ -487,6 +501,10 @@ pub fn plan_from_args(
         )));
     }
     plan.phase_weight = args.phase_weight;
+    plan.weighting = match args.weighting {
+        None | Some(WeightingArg::Relative) => Weighting::Relative,
+        Some(WeightingArg::Absolute) => Weighting::Absolute,
+    };
     plan.jumps = match args.jump_weight {
         None => JumpChoice::Auto,
         Some(l) if l == 0.0 => JumpChoice::Off,
@@ -1085,9 +1103,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if !(args.integer || sign == SignArg::Auto) {
         return run_identify(&args, kind, sign);
     }
-    if args.landscape.is_some() || args.no_phase || args.phase_convention.is_some() {
+    if args.landscape.is_some()
+        || args.no_phase
+        || args.phase_convention.is_some()
+        || args.weighting.is_some()
+    {
         return Err(CliError::Usage(
-            "--landscape, --no-phase and --phase-convention belong to the default staged fit, not to --integer or --sign auto".into(),
+            "--landscape, --no-phase, --phase-convention and --weighting belong to the default staged fit, not to --integer or --sign auto (which fit Eq 31, absolute)".into(),
         ));
     }
     let data = args.data.load_lag_phases()?;

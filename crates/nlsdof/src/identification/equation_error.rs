@@ -285,16 +285,16 @@ fn natural(
 /// the scaled normal matrix (nalgebra's symmetric eigen-decomposition).
 struct SmallLs {
     n: usize,
-    ata: [[f64; 6]; 6],
-    atb: [f64; 6],
+    ata: [[f64; 8]; 8],
+    atb: [f64; 8],
 }
 
 impl SmallLs {
     fn new(n: usize) -> Self {
         Self {
             n,
-            ata: [[0.0; 6]; 6],
-            atb: [0.0; 6],
+            ata: [[0.0; 8]; 8],
+            atb: [0.0; 8],
         }
     }
 
@@ -746,10 +746,104 @@ fn magnitude_start(prep: &Prepared, terms: Terms, sign_hint: f64) -> Vec<f64> {
     x
 }
 
+/// Closed-form start of the magnitude problem by *lifting*: squared, the
+/// no-phase equation of every point is linear in products of the unknowns.
+/// In the scaled unknowns of [`Magnitude`], with `u = f_a/a`, `w = Ω̃²`,
+/// `v = f_d/(Ω_ref a)` and `s = γ/(Ω_ref² a)`,
+///
+/// ```text
+/// S̃² + (Ω̃D̃)² = G² s²,   S̃ = α̃ + β̃ u − w,   Ω̃D̃ = δ̃ √w + κ̃ v
+/// ⇔ α̃² + 2α̃β̃ u + β̃² u² + (δ̃² − 2α̃) w − 2β̃ u w + 2δ̃κ̃ √w v + κ̃² v² − G² s² = −w²
+/// ```
+///
+/// which is linear least squares in `z = (α̃², α̃β̃, β̃², δ̃² − 2α̃, β̃, δ̃κ̃, κ̃², G²)`
+/// (rows divided by `G₀² s²` so that each measures a relative error, as the
+/// residual of [`Magnitude`] does). The products are then split: `α̃ = √z₁`,
+/// `β̃ = z₅`, `δ̃ = √(z₄ + 2α̃)`, `κ̃ = √z₇`, `G = √z₈`. Exact for exact data;
+/// with noise a biased but close start, from which LM needs a few steps.
+/// `None` when the lifted system is rank deficient or a square is negative.
+fn magnitude_lifted_start(prep: &Prepared, terms: Terms, reg: &[(f64, f64)]) -> Option<Vec<f64>> {
+    let wr = prep.scales.omega_ref;
+    let stiff = terms.stiffness;
+    let damp = terms.damping;
+    let free_gain = terms.gain.is_none();
+    let g0 = terms.gain.unwrap_or(1.0);
+    let n = 2 + 3 * usize::from(stiff) + 2 * usize::from(damp) + usize::from(free_gain);
+    let mut ls = SmallLs::new(n);
+    let mut row = [0.0; 8];
+    for (p, &(fa, fd)) in prep.points.iter().zip(reg) {
+        let u = fa / p.a;
+        let w = p.omega * p.omega / (wr * wr);
+        let v = fd / (wr * p.a);
+        let sg = p.gamma / (wr * wr * p.a);
+        let k = p.sw / (g0 * g0 * sg * sg);
+        let mut q = 0;
+        let mut put = |x: f64, q: &mut usize| {
+            row[*q] = k * x;
+            *q += 1;
+        };
+        put(1.0, &mut q);
+        if stiff {
+            put(2.0 * u, &mut q);
+            put(u * u, &mut q);
+        }
+        put(w, &mut q);
+        if stiff {
+            put(-2.0 * u * w, &mut q);
+        }
+        if damp {
+            put(2.0 * w.sqrt() * v, &mut q);
+            put(v * v, &mut q);
+        }
+        let mut b = -w * w;
+        if free_gain {
+            put(-sg * sg, &mut q);
+        } else {
+            b += g0 * g0 * sg * sg;
+        }
+        ls.add(&row[..n], k * b);
+    }
+    let (z, _) = ls.solve();
+    let z = z?;
+    let mut q = 0;
+    let mut next = || {
+        q += 1;
+        z[q - 1]
+    };
+    let a2 = next();
+    let (_ab, _b2) = if stiff { (next(), next()) } else { (0.0, 0.0) };
+    let c = next();
+    let be = if stiff { next() } else { 0.0 };
+    let (_dk, k2) = if damp { (next(), next()) } else { (0.0, 0.0) };
+    let g2 = if free_gain { next() } else { g0 * g0 };
+    if !(a2 > 0.0 && g2 > 0.0) {
+        return None;
+    }
+    let al = a2.sqrt();
+    let d2 = c + 2.0 * al;
+    let mut x = vec![al];
+    if stiff {
+        x.push(be);
+    }
+    // damping shared out as the data say; a square estimated ≤ 0 starts
+    // from a small positive value (the bound is 0)
+    let tiny = 1e-3 * prep.delta0.max(f64::MIN_POSITIVE);
+    x.push(if d2 > 0.0 { d2.sqrt() } else { tiny });
+    if damp {
+        x.push(if k2 > 0.0 { k2.sqrt() } else { tiny });
+    }
+    if free_gain {
+        x.push(g2.sqrt());
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
 /// Equation-error fit **without phase** at fixed exponents (bounded LM on
 /// the relative magnitude residual). `warm` is a scaled start (e.g. from a
-/// neighbouring landscape node); otherwise the trivial starts (β̃ of either
-/// sign, damping from the peak height) are tried and the best kept.
+/// neighbouring landscape node); otherwise the lifted closed-form start
+/// ([`magnitude_lifted_start`]) is used, and the trivial starts (β̃ of
+/// either sign, damping from the peak height) are tried as well when LM
+/// from it does not converge.
 pub fn solve_magnitude(
     prep: &Prepared,
     terms: Terms,
@@ -786,21 +880,32 @@ pub fn solve_magnitude(
         gtol: 1e-13,
         cost_floor: 1e-28 * prep.points.len() as f64,
     };
-    let mut starts: Vec<Vec<f64>> = Vec::new();
-    if let Some(w) = warm {
-        starts.push(w.to_vec());
-    } else {
-        starts.push(magnitude_start(prep, terms, 1.0));
-        if terms.stiffness {
-            starts.push(magnitude_start(prep, terms, -1.0));
-            starts.push(magnitude_start(prep, terms, 0.0));
-        }
-    }
     let mut best: Option<super::levenberg_marquardt::LmResult> = None;
-    for s in &starts {
+    let run = |s: &[f64], best: &mut Option<super::levenberg_marquardt::LmResult>| {
         if let Ok(r) = minimise(&prob, s, &lo, &hi, &opts) {
             if best.as_ref().map_or(true, |b| r.cost < b.cost) {
-                best = Some(r);
+                *best = Some(r);
+            }
+        }
+    };
+    if let Some(w) = warm {
+        run(w, &mut best);
+    } else {
+        if let Some(s) = magnitude_lifted_start(prep, terms, &prob.reg) {
+            run(&s, &mut best);
+        }
+        use super::levenberg_marquardt::Termination as T;
+        let settled = best.as_ref().is_some_and(|b| {
+            matches!(
+                b.termination,
+                T::ZeroResidual | T::SmallStep | T::SmallCostReduction | T::SmallGradient
+            )
+        });
+        if !settled {
+            run(&magnitude_start(prep, terms, 1.0), &mut best);
+            if terms.stiffness {
+                run(&magnitude_start(prep, terms, -1.0), &mut best);
+                run(&magnitude_start(prep, terms, 0.0), &mut best);
             }
         }
     }

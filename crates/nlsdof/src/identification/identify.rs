@@ -105,6 +105,25 @@ pub enum JumpChoice {
     Weight(f64),
 }
 
+/// How the output-error amplitude residuals are weighted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Weighting {
+    /// Eq 31 as in the paper: `(a_model − a_meas)/γ` at every point, the
+    /// maximum-likelihood choice when the amplitude noise has the same size
+    /// at every point of a level.
+    Absolute,
+    /// Relative errors `K (a_model − a_meas)/a_meas` (phase errors `K Δφ`),
+    /// the maximum-likelihood choice when the noise is a fixed fraction of
+    /// the amplitude (as the noise of a sensor read through a fixed-range
+    /// amplifier and of a FFT estimate at a fixed SNR). `K = max_c a_peak,c/γ_c`
+    /// keeps the residuals in the units of Eq 31, so the jump residuals and
+    /// the phase weight mean the same under both weightings. Amplitudes
+    /// below 1 % of their curve's peak count as 1 % of it (a floor against
+    /// dividing by noise, e.g. stuck Coulomb points of amplitude 0).
+    #[default]
+    Relative,
+}
+
 /// Real or integer exponents.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ExponentChoice {
@@ -140,6 +159,8 @@ pub struct FitPlan {
     /// Weight `w_φ` of the phase residuals.
     pub phase_weight: f64,
     pub jumps: JumpChoice,
+    /// Weighting of the output-error residuals.
+    pub weighting: Weighting,
     /// Landscape nodes `(n_ρ, n_η)` over the exponents' bounds.
     pub grid: (usize, usize),
     /// Candidates refined by output error.
@@ -170,6 +191,7 @@ impl FitPlan {
             phase: PhaseChoice::Auto,
             phase_weight: 1.0,
             jumps: JumpChoice::Auto,
+            weighting: Weighting::Relative,
             grid: (41, 41),
             refine: 3,
             starts: 1,
@@ -209,6 +231,11 @@ impl FitPlan {
 
     pub fn with_jumps(mut self, j: JumpChoice) -> Self {
         self.jumps = j;
+        self
+    }
+
+    pub fn with_weighting(mut self, w: Weighting) -> Self {
+        self.weighting = w;
         self
     }
 
@@ -511,6 +538,9 @@ pub fn identify(
             _ => c.phases = None,
         }
     }
+    if plan.weighting == Weighting::Relative {
+        relative_weights(&mut fit_data);
+    }
     let jump_weight = match plan.jumps {
         JumpChoice::Off => 0.0,
         JumpChoice::Weight(w) => w,
@@ -530,60 +560,105 @@ pub fn identify(
     };
     let refine_data = subsample(&fit_data, plan.refine_points);
     let polish = refine_data.len() < fit_data.len();
+    // Each candidate is refined independently (in parallel); the winner is
+    // chosen in candidate order, so the result does not depend on the
+    // number of threads.
+    use rayon::prelude::*;
+    type Refined = (Candidate, Option<(FitResult, FitSpec, f64)>);
+    let refined: Vec<Result<Refined, IdentifyError>> = candidate_nodes(&land, plan.refine.max(1))
+        .into_par_iter()
+        .filter_map(|(i, j)| land.fit_at(i, j).map(|ee| (i, j, ee)))
+        .map(|(i, j, ee)| {
+            let sign = match plan.sign {
+                SignChoice::Hardening => Sign::Hardening,
+                SignChoice::Softening => Sign::Softening,
+                SignChoice::Auto => {
+                    if ee.theta[BETA] < 0.0 {
+                        Sign::Softening
+                    } else {
+                        Sign::Hardening
+                    }
+                }
+            };
+            let mut spec = configure(sign)?;
+            spec.status[GAIN] = gain_status;
+            if let Status::Fixed(g) = gain_status {
+                spec.start[GAIN] = g;
+            }
+            spec.phase_weight = use_phase.then_some(plan.phase_weight);
+            start_from(&mut spec, ee, integer);
+            let res = fit_impl(
+                &refine_data,
+                &spec,
+                &opts,
+                (jump_weight > 0.0).then_some(jump_weight),
+                progress,
+            );
+            let oe = match &res {
+                Ok(r) => Ok(r.minima.first().map_or(r.cost, |m| m.cost)),
+                Err(e) => Err(e.to_string()),
+            };
+            let cand = Candidate {
+                rho: land.rho[i],
+                eta: land.eta[j],
+                ee_cost: land.at(i, j),
+                sign,
+                oe: oe.clone(),
+            };
+            let kept = match (res, oe) {
+                (Ok(r), Ok(c)) => Some((r, spec, c)),
+                _ => None,
+            };
+            Ok((cand, kept))
+        })
+        .collect();
     let mut candidates = Vec::new();
     let mut best: Option<(FitResult, FitSpec, f64)> = None;
     let mut last_err = String::new();
-    for (i, j) in candidate_nodes(&land, plan.refine.max(1)) {
-        let Some(ee) = land.fit_at(i, j) else {
-            continue;
-        };
-        let sign = match plan.sign {
-            SignChoice::Hardening => Sign::Hardening,
-            SignChoice::Softening => Sign::Softening,
-            SignChoice::Auto => {
-                if ee.theta[BETA] < 0.0 {
-                    Sign::Softening
-                } else {
-                    Sign::Hardening
-                }
-            }
-        };
-        let mut spec = configure(sign)?;
-        spec.status[GAIN] = gain_status;
-        if let Status::Fixed(g) = gain_status {
-            spec.start[GAIN] = g;
+    for r in refined {
+        let (cand, kept) = r?;
+        if let Err(e) = &cand.oe {
+            last_err = e.clone();
         }
-        spec.phase_weight = use_phase.then_some(plan.phase_weight);
-        start_from(&mut spec, ee, integer);
-        let res = fit_impl(
-            &refine_data,
-            &spec,
-            &opts,
-            (jump_weight > 0.0).then_some(jump_weight),
-            progress,
-        );
-        let oe = match &res {
-            Ok(r) => Ok(r.minima.first().map_or(r.cost, |m| m.cost)),
-            Err(e) => {
-                last_err = e.to_string();
-                Err(e.to_string())
-            }
-        };
-        candidates.push(Candidate {
-            rho: land.rho[i],
-            eta: land.eta[j],
-            ee_cost: land.at(i, j),
-            sign,
-            oe: oe.clone(),
-        });
-        if let (Ok(r), Ok(c)) = (res, oe) {
-            // prefer converged fits, then the lower objective
+        candidates.push(cand);
+        if let Some((r, spec, c)) = kept {
+            // the lower objective wins; a converged fit wins a near tie
             let better = match &best {
                 None => true,
-                Some((b, _, bc)) => (r.converged, -c) > (b.converged, -*bc),
+                Some((b, _, bc)) => {
+                    let tie = (c - *bc).abs() <= 1e-6 * bc.abs().max(c.abs());
+                    if tie {
+                        r.converged && !b.converged
+                    } else {
+                        c < *bc
+                    }
+                }
             };
             if better {
                 best = Some((r, spec, c));
+            }
+        }
+    }
+    // A winner that stopped on its iteration limit (a long flat valley, as
+    // an exponent the data barely determine) is continued once from where
+    // it stopped; the continuation is kept when it is not worse.
+    if let Some((r, spec, c)) = &best {
+        if !r.converged && r.at_bounds.is_empty() {
+            let mut spec2 = spec.clone();
+            for j in spec2.free_indices() {
+                spec2.start[j] = r.theta[j];
+            }
+            if let Ok(r2) = fit_impl(
+                &refine_data,
+                &spec2,
+                &opts,
+                (jump_weight > 0.0).then_some(jump_weight),
+                progress,
+            ) {
+                let c2 = r2.minima.first().map_or(r2.cost, |m| m.cost);
+                if c2 <= *c {
+                    best = Some((r2, spec2, c2));
+                }
             }
         }
     }
@@ -615,6 +690,29 @@ pub fn identify(
         jump_weight,
         candidates,
     })
+}
+
+/// Multiplies every weight by `(K γ_c / max(a, a_peak,c/100))²`,
+/// `K = max_c a_peak,c/γ_c` ([`Weighting::Relative`]).
+fn relative_weights(data: &mut Dataset) {
+    let peak = |c: &super::data::Curve| c.amplitudes.iter().fold(0.0f64, |m, &a| m.max(a));
+    let k = data
+        .curves
+        .iter()
+        .map(|c| peak(c) / c.gamma)
+        .fold(0.0f64, f64::max);
+    if !(k.is_finite() && k > 0.0) {
+        return;
+    }
+    for c in &mut data.curves {
+        let floor = 0.01 * peak(c);
+        if !(floor > 0.0) {
+            continue;
+        }
+        for (w, &a) in c.weights.iter_mut().zip(&c.amplitudes) {
+            *w *= (k * c.gamma / a.max(floor)).powi(2);
+        }
+    }
 }
 
 /// The landscape nodes refined by output error: the best `refine` grid

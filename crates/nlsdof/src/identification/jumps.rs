@@ -286,11 +286,18 @@ impl<'a> WithJumps<'a> {
         theta: &[f64; N_PARAMS],
         jacobian: bool,
     ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
+        use rayon::prelude::*;
         let sw = self.weight.sqrt();
         let mut r = Vec::with_capacity(self.targets.len());
         let mut j = Vec::new();
-        for t in &self.targets {
-            let (w, dw) = self.predicted(theta, t)?;
+        // one model sweep per target, in parallel (collected in order)
+        let predicted: Vec<Option<(f64, [f64; N_PARAMS])>> = self
+            .targets
+            .par_iter()
+            .map(|t| self.predicted(theta, t))
+            .collect();
+        for (t, p) in self.targets.iter().zip(predicted) {
+            let (w, dw) = p?;
             let f = sw * t.scale / t.omega;
             // dead zone: a model fold anywhere inside the measured step
             // interval [Ω_J, Ω_J,next] agrees with the data (the sweep
@@ -330,17 +337,26 @@ impl LeastSquares for WithJumps<'_> {
     }
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
-        let mut r = self.problem.residuals(u)?;
         let th = self.problem.theta(u);
-        let (rj, _) = self.jump_residuals(&th, false)?;
+        // the Eq 31 sweeps and the jump sweeps run side by side
+        let (r, jr) = rayon::join(
+            || self.problem.residuals(u),
+            || self.jump_residuals(&th, false),
+        );
+        let mut r = r?;
+        let (rj, _) = jr?;
         r.extend(rj);
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
-        let (mut r, mut j) = self.problem.residuals_and_jacobian(u)?;
         let th = self.problem.theta(u);
-        let (rj, jj) = self.jump_residuals(&th, true)?;
+        let (rj0, jr) = rayon::join(
+            || self.problem.residuals_and_jacobian(u),
+            || self.jump_residuals(&th, true),
+        );
+        let (mut r, mut j) = rj0?;
+        let (rj, jj) = jr?;
         let cols = self.problem.dtheta_du(&th);
         for row in &jj {
             for col in &cols {

@@ -29,7 +29,7 @@ pub use data::{Curve, DataError, Dataset, Record};
 pub use equation_error::{EquationErrorFit, PhaseConvention};
 pub use identify::{
     identify, FitPlan, GainChoice, Identification, IdentifyError, JumpChoice, PhaseChoice,
-    SignChoice,
+    SignChoice, Weighting,
 };
 pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};

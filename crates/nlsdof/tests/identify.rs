@@ -8,7 +8,7 @@ mod support;
 
 use nlsdof::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 use nlsdof::identification::equation_error::{
-    solve_magnitude, solve_phase, PhaseConvention, Prepared, Terms,
+    solve_magnitude, solve_magnitude_lifted, solve_phase, PhaseConvention, Prepared, Terms,
 };
 use nlsdof::identification::landscape::{landscape, Axis, LandscapePhase};
 use nlsdof::identification::models::*;
@@ -148,6 +148,16 @@ fn equation_error_without_phase_is_exact() {
             damping: true,
             gain: None,
         };
+        // the lifted closed form alone is exact on exact data
+        let l = solve_magnitude_lifted(&prep, terms, t[RHO], t[ETA]).unwrap();
+        for j in [ALPHA, DELTA, BETA, KAPPA, GAIN] {
+            assert!(
+                rel(l[j], t[j]) < 1e-7,
+                "{kind}: lifted {j}: {} vs {}",
+                l[j],
+                t[j]
+            );
+        }
         let (f, _) = solve_magnitude(&prep, terms, t[RHO], t[ETA], None).unwrap();
         for j in [ALPHA, DELTA, BETA, KAPPA, GAIN] {
             assert!(

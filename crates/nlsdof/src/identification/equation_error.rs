@@ -769,9 +769,13 @@ fn magnitude_lifted_start(prep: &Prepared, terms: Terms, reg: &[(f64, f64)]) -> 
     let free_gain = terms.gain.is_none();
     let g0 = terms.gain.unwrap_or(1.0);
     let n = 2 + 3 * usize::from(stiff) + 2 * usize::from(damp) + usize::from(free_gain);
-    let mut ls = SmallLs::new(n);
+    // rows kept for an SVD solve: the normal equations would square the
+    // condition number, and δ̃² = z₄ + 2α̃ already cancels ~4 digits
+    let m = prep.points.len();
+    let mut a_mat = nalgebra::DMatrix::<f64>::zeros(m, n);
+    let mut b_vec = nalgebra::DVector::<f64>::zeros(m);
     let mut row = [0.0; 8];
-    for (p, &(fa, fd)) in prep.points.iter().zip(reg) {
+    for (i, (p, &(fa, fd))) in prep.points.iter().zip(reg).enumerate() {
         let u = fa / p.a;
         let w = p.omega * p.omega / (wr * wr);
         let v = fd / (wr * p.a);
@@ -801,10 +805,26 @@ fn magnitude_lifted_start(prep: &Prepared, terms: Terms, reg: &[(f64, f64)]) -> 
         } else {
             b += g0 * g0 * sg * sg;
         }
-        ls.add(&row[..n], k * b);
+        for (c, &v) in row[..n].iter().enumerate() {
+            a_mat[(i, c)] = v;
+        }
+        b_vec[i] = k * b;
     }
-    let (z, _) = ls.solve();
-    let z = z?;
+    // unit column norms, then the SVD least-squares solution
+    let norms: Vec<f64> = (0..n).map(|c| a_mat.column(c).norm()).collect();
+    if norms.iter().any(|&v| !(v > 0.0 && v.is_finite())) {
+        return None;
+    }
+    for (c, &v) in norms.iter().enumerate() {
+        a_mat.column_mut(c).scale_mut(1.0 / v);
+    }
+    let svd = a_mat.svd(true, true);
+    let smax = svd.singular_values.max();
+    if !(svd.singular_values.min() > 1e-12 * smax) {
+        return None;
+    }
+    let y = svd.solve(&b_vec, 0.0).ok()?;
+    let z: Vec<f64> = (0..n).map(|c| y[c] / norms[c]).collect();
     let mut q = 0;
     let mut next = || {
         q += 1;
@@ -836,6 +856,26 @@ fn magnitude_lifted_start(prep: &Prepared, terms: Terms, reg: &[(f64, f64)]) -> 
         x.push(g2.sqrt());
     }
     x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The lifted closed-form estimate of [`magnitude_lifted_start`] as a
+/// natural θ (no iteration): exact on exact data, a start otherwise.
+pub fn solve_magnitude_lifted(
+    prep: &Prepared,
+    terms: Terms,
+    rho: f64,
+    eta: f64,
+) -> Option<[f64; N_PARAMS]> {
+    let sc = prep.scales;
+    let reg: Vec<(f64, f64)> = prep
+        .points
+        .iter()
+        .map(|p| regressors(p, rho, eta, &sc))
+        .collect();
+    let x = magnitude_lifted_start(prep, terms, &reg)?;
+    let prob = Magnitude { prep, terms, reg };
+    let (al, be, de, ka, g) = prob.unpack(&x);
+    Some(natural(&sc, rho, eta, al, be, de, ka, g))
 }
 
 /// Equation-error fit **without phase** at fixed exponents (bounded LM on

@@ -22,7 +22,7 @@
 mod support;
 
 use nlsdof::identification::models::*;
-use nlsdof::identification::{identify, FitPlan, ModelKind};
+use nlsdof::identification::{identify, FitPlan, ModelKind, Weighting};
 use support::synthetic::{case, exponent_crlb, Case};
 
 struct Outcome {
@@ -42,8 +42,8 @@ struct Outcome {
     line: String,
 }
 
-fn run(c: &Case) -> Outcome {
-    let plan = FitPlan::new(ModelKind::Generalised);
+fn run(c: &Case, weighting: Weighting) -> Outcome {
+    let plan = FitPlan::new(ModelKind::Generalised).with_weighting(weighting);
     let t = &c.truth;
     let (sd_rho, sd_eta) = exponent_crlb(c).unwrap_or((f64::INFINITY, f64::INFINITY));
     let informative = 1.96 * sd_rho <= 0.1 && 1.96 * sd_eta <= 0.1;
@@ -147,13 +147,13 @@ struct Tally {
     passed_informative: usize,
 }
 
-fn suite(seeds: std::ops::Range<u64>) -> Tally {
+fn suite(seeds: std::ops::Range<u64>, weighting: Weighting) -> Tally {
     use rayon::prelude::*;
     let n = seeds.end - seeds.start;
     let outcomes: Vec<Outcome> = seeds
         .clone()
         .into_par_iter()
-        .map(|s| run(&case(s)))
+        .map(|s| run(&case(s), weighting))
         .collect();
     let mut passed = 0;
     let mut consistent = 0;
@@ -196,16 +196,34 @@ fn suite(seeds: std::ops::Range<u64>) -> Tally {
 
 #[test]
 fn synthetic_suite_ci_subset() {
-    let t = suite(0..24);
+    let t = suite(0..24, Weighting::default());
     let n = t.n;
-    // Measured (docs/identification.md): the default fit reaches the data's
-    // optimum (alpha, delta, curves) on all 24 and is within 2.58 CRLB sd
-    // of the true exponents on 23; the exponent criterion (within
-    // 0.1) holds on 9 only, since at 1 % noise the data of 22 of these 24
-    // cases do not pin both exponents to 0.1 (1.96 CRLB sd > 0.1). Floors guard against
-    // regressions; the 97 % is asserted by the full suites.
+    // Measured (docs/identification.md), default (absolute, Eq 31)
+    // weights: the fit reaches the data's optimum (alpha, delta, curves) on
+    // all 24 and is within 2.58 CRLB sd of the true exponents on 23; the
+    // issue's exponent criterion (within 0.1) holds on 6, since at 1 %
+    // noise the data of 22 of these 24 cases do not pin both exponents to
+    // 0.1 (1.96 CRLB sd > 0.1). Floors guard against regressions; the
+    // issue's 97 % is asserted by the full suites.
     println!(
         "strict {}/{n}, consistent {}/{n}, efficient {}/{n}, fitted {}/{n}",
+        t.passed, t.consistent, t.efficient, t.fitted
+    );
+    assert_eq!(t.fitted, n, "{} of {n} fitted", t.fitted);
+    assert!(t.efficient >= 23, "{} of {n} efficient", t.efficient);
+    assert!(t.consistent >= 19, "{} of {n} consistent", t.consistent);
+    assert!(t.passed >= 6, "{} of {n} strict", t.passed);
+}
+
+/// Relative weights, the maximum-likelihood choice for the generator's
+/// proportional noise: the reported intervals cover the truth (measured
+/// 23 of 24 consistent, against 19 with the default weights).
+#[test]
+fn synthetic_suite_ci_subset_relative() {
+    let t = suite(0..24, Weighting::Relative);
+    let n = t.n;
+    println!(
+        "relative: strict {}/{n}, consistent {}/{n}, efficient {}/{n}, fitted {}/{n}",
         t.passed, t.consistent, t.efficient, t.fitted
     );
     assert_eq!(t.fitted, n, "{} of {n} fitted", t.fitted);
@@ -217,13 +235,23 @@ fn synthetic_suite_ci_subset() {
 #[test]
 #[ignore = "full suite (100 cases): cargo test --release -p nlsdof --test identify_suite -- --ignored"]
 fn synthetic_suite_full() {
-    let t = suite(0..100);
+    let t = suite(0..100, Weighting::default());
     assert!(t.passed >= 97, "{} of {} passed", t.passed, t.n);
 }
 
 #[test]
 #[ignore = "full suite (100 cases), efficiency criterion: cargo test --release -p nlsdof --test identify_suite -- --ignored"]
 fn synthetic_suite_full_efficiency() {
-    let t = suite(0..100);
+    let t = suite(0..100, Weighting::default());
     assert!(t.efficient >= 97, "{} of {} efficient", t.efficient, t.n);
+}
+
+/// The same with relative weights (`--weighting relative`), the
+/// maximum-likelihood choice for the generator's proportional noise.
+#[test]
+#[ignore = "full suite (100 cases), relative weights: cargo test --release -p nlsdof --test identify_suite -- --ignored"]
+fn synthetic_suite_full_relative() {
+    let t = suite(0..100, Weighting::Relative);
+    assert!(t.efficient >= 97, "{} of {} efficient", t.efficient, t.n);
+    assert!(t.consistent >= 90, "{} of {} consistent", t.consistent, t.n);
 }

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 /// `--weighting` (see [`Weighting`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum WeightingArg {
-    Relative,
     Absolute,
+    Relative,
 }
 
 /// `--runs` values for `--beam-dir`.
@@ -156,12 +156,14 @@ pub struct Args {
     /// Weight of the phase residuals relative to the amplitude residuals.
     #[arg(long = "phase-weight", value_name = "W", default_value_t = 1.0)]
     pub phase_weight: f64,
-    /// Amplitude residuals of the output-error fit: relative (default; (a_model - a)/a,
-    /// the maximum-likelihood choice when the noise is a fixed fraction of the amplitude,
-    /// amplitudes below 1 % of their curve's peak counted as 1 %) or absolute (the paper's
-    /// Eq 31, (a_model - a)/gamma, for noise of one size at every point of a level).
-    /// The reported cost is that of the chosen weighting.
-    #[arg(long, value_enum, value_name = "relative|absolute")]
+    /// Amplitude residuals of the output-error fit. absolute (default): the paper's
+    /// Eq 31, (a_model - a)/gamma, for noise of one size along a level; relative:
+    /// (a_model - a)/a, the maximum-likelihood choice when the noise is a fixed fraction
+    /// of the amplitude (amplitudes below 1 % of their curve's peak counted as 1 %).
+    /// Relative weights trade the resonance peaks for the low-amplitude points when the
+    /// model cannot follow the data everywhere (the clamped beams: peaks 50-80 % low).
+    /// The reported cost is that of the weighting used.
+    #[arg(long, value_enum, value_name = "absolute|relative")]
     pub weighting: Option<WeightingArg>,
     /// Write the exponent landscape: FILE.json (grid), FILE.svg or FILE.png (heat map).
     #[arg(long, value_name = "FILE")]
@@ -502,8 +504,8 @@ pub fn plan_from_args(
     }
     plan.phase_weight = args.phase_weight;
     plan.weighting = match args.weighting {
-        None | Some(WeightingArg::Relative) => Weighting::Relative,
-        Some(WeightingArg::Absolute) => Weighting::Absolute,
+        None | Some(WeightingArg::Absolute) => Weighting::Absolute,
+        Some(WeightingArg::Relative) => Weighting::Relative,
     };
     plan.jumps = match args.jump_weight {
         None => JumpChoice::Auto,

@@ -44,7 +44,7 @@ use crate::harmonic_balance::SweepDirection;
 use crate::model::NormalisedModel;
 use crate::simulation::coulomb::{self, Mode};
 use crate::simulation::law::{dispatch, Dyn, Law, Visit};
-use crate::simulation::rk4::step;
+use crate::simulation::rk4_step::step;
 use crate::simulation::{check_model, Sample, SimulationError, State, Summary};
 use std::f64::consts::{PI, TAU};
 
@@ -52,7 +52,7 @@ use std::f64::consts::{PI, TAU};
 /// up front).
 pub const MAX_SAMPLES_PER_CYCLE: usize = 100_000;
 /// Largest number of frequency steps of one sweep.
-pub const MAX_STEPS: usize = 1_000_000;
+pub use crate::excitation::MAX_STEPS;
 
 /// Rig settings.
 #[derive(Debug, Clone, Copy, PartialEq)]

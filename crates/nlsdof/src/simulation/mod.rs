@@ -86,11 +86,11 @@
 
 pub(crate) mod coulomb;
 mod dopri;
-mod error;
 pub(crate) mod law;
 pub(crate) mod rk4;
+pub(crate) mod rk4_step;
 
-pub use error::SimulationError;
+pub use crate::error::SimulationError;
 
 use crate::excitation::{Excitation, SampledInput};
 use crate::model::NormalisedModel;

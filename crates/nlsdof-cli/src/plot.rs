@@ -15,12 +15,13 @@
 //! * the swept points as small circles and each jump as a vertical arrow;
 //! * the backbone (undamped free-vibration frequency vs amplitude) dotted grey.
 
-use crate::cmd::frf::Level;
 use crate::error::CliError;
-use nlsdof::{backbone, Fold, Formulation, NormalisedModel, SteadyState, SweepDirection};
+use nlsdof::harmonic_balance::branches::{trace_branches, Branch, BranchOptions};
+use nlsdof::{
+    backbone, ForcedResponse, Formulation, NormalisedModel, PhaseQuadrature, Sweep, SweepDirection,
+};
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
-use std::collections::HashMap;
 use std::f64::consts::PI;
 
 /// Frequencies sampled for the branches (plus the folds).
@@ -30,6 +31,14 @@ const HEIGHT: u32 = 640;
 const LEGEND_WIDTH: u32 = 250;
 /// Largest number of swept-point markers drawn per level.
 const MAX_MARKERS: usize = 100;
+
+/// Result of one input level of `frf` (what the plot draws of it).
+pub struct Level {
+    pub gamma: f64,
+    pub response: ForcedResponse,
+    pub sweep: Sweep,
+    pub phase_quadrature: Option<PhaseQuadrature>,
+}
 
 /// Everything the plot needs.
 pub struct FrfPlot<'a> {
@@ -65,117 +74,20 @@ fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
     CliError::Usage(format!("cannot draw the plot: {e}"))
 }
 
-/// A piece of one branch: points (Hz, m) with one stability.
-#[derive(Debug, Clone)]
-pub struct Polyline {
-    pub points: Vec<(f64, f64)>,
-    pub stable: bool,
-}
-
-type Segment = ((f64, f64), (f64, f64), bool);
-
-fn key(p: (f64, f64), stable: bool) -> (u64, u64, bool) {
-    (p.0.to_bits(), p.1.to_bits(), stable)
-}
-
-/// Joins segments (generated in increasing frequency) into polylines.
-fn merge(segments: Vec<Segment>) -> Vec<Polyline> {
-    let mut lines: Vec<Polyline> = Vec::new();
-    let mut open: HashMap<(u64, u64, bool), usize> = HashMap::new();
-    for (p0, p1, stable) in segments {
-        if let Some(idx) = open.remove(&key(p0, stable)) {
-            lines[idx].points.push(p1);
-            open.insert(key(p1, stable), idx);
-        } else {
-            lines.push(Polyline {
-                points: vec![p0, p1],
-                stable,
-            });
-            open.insert(key(p1, stable), lines.len() - 1);
-        }
-    }
-    lines
-}
-
-fn connect_rankwise(
-    fa: f64,
-    a: &[SteadyState],
-    fb: f64,
-    b: &[SteadyState],
-    out: &mut Vec<Segment>,
-) {
-    for (ra, rb) in a.iter().zip(b) {
-        out.push((
-            (fa, ra.amplitude),
-            (fb, rb.amplitude),
-            ra.stable && rb.stable,
-        ));
-    }
-}
-
-/// All steady-state branches of one level across `[f_min, f_max]` (Hz).
-pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<Polyline>, CliError> {
-    let folds: Vec<Fold> = level.sweep.folds.clone();
-    let fold_hz: Vec<f64> = folds.iter().map(|f| f.omega / (2.0 * PI)).collect();
-    let tol = 1e-9 * (f_max - f_min);
-    let mut samples: Vec<(f64, Vec<SteadyState>)> = Vec::with_capacity(SAMPLES);
-    for i in 0..SAMPLES {
-        let f = f_min + (f_max - f_min) * i as f64 / (SAMPLES - 1) as f64;
-        // A sample exactly at a fold would hold a double root: skip it.
-        if fold_hz.iter().any(|&ff| (ff - f).abs() <= tol) {
-            continue;
-        }
-        let set = level.response.steady_states(2.0 * PI * f)?;
-        samples.push((f, set.roots));
-    }
-    let mut segments: Vec<Segment> = Vec::new();
-    for w in samples.windows(2) {
-        let (fa, ra) = (&w[0].0, &w[0].1);
-        let (fb, rb) = (&w[1].0, &w[1].1);
-        let inside: Vec<usize> = (0..folds.len())
-            .filter(|&k| fold_hz[k] > *fa && fold_hz[k] < *fb)
-            .collect();
-        match inside.len() {
-            0 if ra.len() == rb.len() => connect_rankwise(*fa, ra, *fb, rb, &mut segments),
-            1 if ra.len().abs_diff(rb.len()) == 2 => {
-                let fold = folds[inside[0]];
-                let fp = (fold_hz[inside[0]], fold.amplitude);
-                // The side holding the pair born/dying at the fold.
-                let pair_after = rb.len() > ra.len();
-                let (pair_side, other) = if pair_after { (rb, ra) } else { (ra, rb) };
-                let j = (0..pair_side.len() - 1)
-                    .min_by(|&x, &y| {
-                        let dx = (pair_side[x].amplitude - fold.amplitude).abs()
-                            + (pair_side[x + 1].amplitude - fold.amplitude).abs();
-                        let dy = (pair_side[y].amplitude - fold.amplitude).abs()
-                            + (pair_side[y + 1].amplitude - fold.amplitude).abs();
-                        dx.total_cmp(&dy)
-                    })
-                    .unwrap_or(0);
-                let rest: Vec<SteadyState> = pair_side
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != j && *k != j + 1)
-                    .map(|(_, r)| *r)
-                    .collect();
-                if pair_after {
-                    connect_rankwise(*fa, other, *fb, &rest, &mut segments);
-                    for r in &pair_side[j..=j + 1] {
-                        segments.push((fp, (*fb, r.amplitude), r.stable));
-                    }
-                } else {
-                    connect_rankwise(*fa, &rest, *fb, other, &mut segments);
-                    for r in &pair_side[j..=j + 1] {
-                        segments.push(((*fa, r.amplitude), fp, r.stable));
-                    }
-                }
-            }
-            // Root count changes without one identified fold (sticking
-            // boundary, two folds within one sample step): leave a gap.
-            _ => {}
-        }
-    }
-    Ok(merge(segments))
+/// All steady-state branches of one level across `[f_min, f_max]` (Hz),
+/// as (Hz, m) polylines.
+pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<Branch>, CliError> {
+    let opts = BranchOptions {
+        samples: SAMPLES,
+        radians_per_unit: 2.0 * PI,
+    };
+    Ok(trace_branches(
+        &level.response,
+        &level.sweep.folds,
+        f_min,
+        f_max,
+        &opts,
+    )?)
 }
 
 /// Backbone as runs of (Hz, m) inside the band, clipped at its edges.
@@ -246,7 +158,7 @@ fn tick_label(v: f64, span: f64) -> String {
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
     crate::fonts::register();
-    let mut level_lines: Vec<Vec<Polyline>> = Vec::with_capacity(p.levels.len());
+    let mut level_lines: Vec<Vec<Branch>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {
         let lines = branches(l, p.f_min, p.f_max)?;
@@ -498,36 +410,6 @@ mod tests {
             response,
             sweep,
             phase_quadrature,
-        }
-    }
-
-    #[test]
-    fn branches_of_a_hardening_duffing_meet_at_the_folds() {
-        let l = level(&duffing(), 2.0, 8.0, 16.0, 50);
-        assert_eq!(l.sweep.folds.len(), 2);
-        let lines = branches(&l, 8.0, 16.0).unwrap();
-        // resonant branch 8 Hz -> upper fold, low branch lower fold -> 16 Hz,
-        // and the unstable middle branch from fold to fold
-        assert_eq!(lines.iter().filter(|p| p.stable).count(), 2, "{lines:?}");
-        assert_eq!(lines.iter().filter(|p| !p.stable).count(), 1);
-        for fold in &l.sweep.folds {
-            let fp = (fold.omega / (2.0 * PI), fold.amplitude);
-            let touching: Vec<&Polyline> = lines
-                .iter()
-                .filter(|p| p.points.first() == Some(&fp) || p.points.last() == Some(&fp))
-                .collect();
-            assert_eq!(touching.len(), 2, "fold {fp:?}");
-            assert!(touching.iter().any(|p| p.stable) && touching.iter().any(|p| !p.stable));
-        }
-        for p in &lines {
-            assert!(
-                p.points.windows(2).all(|w| w[1].0 > w[0].0),
-                "increasing frequency"
-            );
-            assert!(p
-                .points
-                .iter()
-                .all(|&(f, a)| (8.0..=16.0).contains(&f) && a > 0.0));
         }
     }
 

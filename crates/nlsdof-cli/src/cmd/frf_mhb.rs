@@ -4,7 +4,7 @@
 //! ([`nlsdof::multi_harmonic`]). Output formats extend those of `frf`:
 //! every point carries its harmonics and `max_abs_x`.
 
-use super::frf::Args;
+use super::roots::jumps_text;
 use crate::error::CliError;
 use nlsdof::multi_harmonic::sweep::{sweep, MhbSweep};
 use nlsdof::multi_harmonic::{
@@ -40,6 +40,25 @@ pub fn check_damped(model: &Model, flag: &str) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// What `frf --harmonics H` was asked for (the parsed `frf` arguments).
+pub struct Request<'a> {
+    /// The model file, as named.
+    pub model: &'a std::path::Path,
+    pub sweep: SweepDirection,
+    pub steps: usize,
+    pub harmonics: usize,
+    pub json: bool,
+    pub csv: bool,
+    pub plot: Option<&'a std::path::Path>,
+}
+
+fn sweep_name(d: SweepDirection) -> &'static str {
+    match d {
+        SweepDirection::Up => "up",
+        SweepDirection::Down => "down",
+    }
 }
 
 /// Checks `--harmonics`.
@@ -152,7 +171,7 @@ fn distortion(q: &[f64]) -> f64 {
 }
 
 pub fn run(
-    args: &Args,
+    args: &Request,
     model: &Model,
     gammas: &[f64],
     omegas: &[f64],
@@ -161,7 +180,7 @@ pub fn run(
 ) -> Result<(), CliError> {
     let h = args.harmonics;
     check_damped(model, "--harmonics")?;
-    let levels = compute(model, gammas, omegas, args.sweep.to_core(), h)?;
+    let levels = compute(model, gammas, omegas, args.sweep, h)?;
     for (i, l) in levels.iter().enumerate() {
         if let Some(w) = &l.sweep.warning {
             eprintln!(
@@ -179,14 +198,14 @@ pub fn run(
     } else {
         text_output(args, model, &levels, f_min, f_max)
     };
-    if let Some(path) = &args.plot {
+    if let Some(path) = args.plot {
         let title = format!(
             "{} - harmonic balance, H = {h}, sweep {}",
             args.model
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default(),
-            args.sweep.name()
+            sweep_name(args.sweep)
         );
         let svg = render(&title, &levels, f_min, f_max)?;
         nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;
@@ -198,7 +217,7 @@ pub fn run(
     Ok(())
 }
 
-fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
+fn json_output(args: &Request, model: &Model, levels: &[MhbLevel]) -> String {
     let lv: Vec<_> = levels
         .iter()
         .map(|l| {
@@ -233,7 +252,7 @@ fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
                 .collect();
             json!({
                 "gamma": l.gamma,
-                "sweep": args.sweep.name(),
+                "sweep": sweep_name(args.sweep),
                 "points": points,
                 "jumps": jumps,
                 "folds_hz": l.sweep.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
@@ -256,7 +275,7 @@ fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
     format!("{out}\n")
 }
 
-fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
+fn csv_output(args: &Request, levels: &[MhbLevel]) -> String {
     let h = args.harmonics;
     let mut s =
         String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking,max_abs_x");
@@ -275,7 +294,7 @@ fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
                 hz(p.omega),
                 harmonic_amplitude(q, 1),
                 harmonic_phase(q, 1).to_degrees(),
-                args.sweep.name(),
+                sweep_name(args.sweep),
                 p.stable,
                 max_abs_displacement(q)
             );
@@ -288,7 +307,13 @@ fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
     s
 }
 
-fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_max: f64) -> String {
+fn text_output(
+    args: &Request,
+    model: &Model,
+    levels: &[MhbLevel],
+    f_min: f64,
+    f_max: f64,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -299,7 +324,7 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
     let _ = writeln!(
         s,
         "stepped-sine sweep {}, {} .. {} Hz, {} steps; harmonic balance with H = {} harmonics (constant and even terms included), pseudo-arclength continuation, Hill stability",
-        args.sweep.name(),
+        sweep_name(args.sweep),
         f_min,
         f_max,
         args.steps,
@@ -359,7 +384,7 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
                 "  no stable state    at {unstable} steps (followed state unstable)"
             );
         }
-        super::frf::jumps_text(&mut s, &l.sweep.jumps);
+        jumps_text(&mut s, &l.sweep.jumps);
         if l.sweep.folds.is_empty() {
             let _ = writeln!(s, "  folds              none on the branch");
         }

@@ -5,9 +5,10 @@
 use crate::cmd::simulate::with_spinner;
 use crate::error::CliError;
 use nlsdof::excitation::SampledInput;
-use nlsdof::signal_processing::stft::{
-    compare, spectrogram, Detrend, Scaling, Spectrogram, SpectrogramDifference, StftOptions,
+use nlsdof::signal_processing::spectrogram_comparison::{
+    compare_records, ComparisonError, ComparisonOptions, SpectrogramComparison,
 };
+use nlsdof::signal_processing::stft::{Detrend, Scaling, Spectrogram, StftOptions};
 use nlsdof::signal_processing::{Symmetry, Window};
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid, UNIFORM_TOLERANCE};
 use serde_json::json;
@@ -473,50 +474,34 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ))
     })?;
     let t_stft = Instant::now();
-    let (s_meas, s_model) = with_spinner("computing spectrograms", || {
-        let s1 = spectrogram(&measured.values, &opts)?;
-        let s2 = match &model {
-            Some(m) => Some(spectrogram(&m.values, &opts)?),
-            None => None,
-        };
-        Ok::<_, nlsdof::signal_processing::stft::StftError>((s1, s2))
+    let cmp_opts = ComparisonOptions {
+        stft: opts,
+        band: (a.fmin, a.fmax),
+        time_offset: measured.t0,
+        floor_fraction: a.floor,
+    };
+    let cmp = with_spinner("computing spectrograms", || {
+        compare_records(
+            &measured.values,
+            model.as_ref().map(|m| m.values.as_slice()),
+            &cmp_opts,
+        )
     })
-    .map_err(stft_err)?;
+    .map_err(|e| match e {
+        ComparisonError::EmptyBand { low, high, last } => CliError::Usage(format!(
+            "no frequency bin in {low}..{high} Hz (bins every {} Hz up to {last} Hz)",
+            measured.fs / layout.nfft as f64,
+        )),
+        ComparisonError::Stft(e) => stft_err(e),
+    })?;
     let stft_s = t_stft.elapsed().as_secs_f64();
     drop(model);
-    let f_last = *s_meas.frequencies.last().unwrap_or(&0.0);
-    let band = (a.fmin.unwrap_or(0.0), a.fmax.unwrap_or(f_last));
-    let f_range = if a.fmin.is_some() || a.fmax.is_some() {
-        Some(band)
-    } else {
-        None
-    };
-    // restrict to the band and shift times to the record's clock
-    let shape = |s: &Spectrogram| {
-        let mut r = match f_range {
-            Some((lo, hi)) => s.restrict(lo, hi),
-            None => s.clone(),
-        };
-        r.times.iter_mut().for_each(|t| *t += measured.t0);
-        r
-    };
-    let sm = shape(&s_meas);
-    drop(s_meas);
-    if sm.n_freq == 0 {
-        return Err(CliError::Usage(format!(
-            "no frequency bin in {}..{} Hz (bins every {} Hz up to {} Hz)",
-            band.0,
-            band.1,
-            measured.fs / layout.nfft as f64,
-            f_last
-        )));
-    }
-    let sn = s_model.as_ref().map(shape);
-    drop(s_model);
-    let diff: Option<SpectrogramDifference> = match &sn {
-        Some(sn) => Some(compare(&sm, sn, a.floor).map_err(stft_err)?),
-        None => None,
-    };
+    let SpectrogramComparison {
+        measured: sm,
+        model: sn,
+        difference: diff,
+        band: f_range,
+    } = cmp;
 
     // --- render everything in memory, then write all files atomically
     let label_m = label_of(&a.input, &measured.column);

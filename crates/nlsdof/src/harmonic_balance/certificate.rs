@@ -31,6 +31,8 @@ pub(crate) fn fast_path_possible(r: &ForcedResponse) -> bool {
 /// `s₀`, `d₀`, `d₁` are monotone in Ω for both formulations, so their
 /// extremes over the cell are at its ends and the test holds for the whole
 /// cell.
+// `!(x >= 0.0)` on purpose: a NaN takes the same branch as a negative value.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub(crate) fn certify_cell(a: &ResponseEquation, b: &ResponseEquation) -> bool {
     let s1 = a.s1;
     if s1 == 0.0 || a.rho == 0.0 {

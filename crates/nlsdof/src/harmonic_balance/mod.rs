@@ -45,6 +45,7 @@
 //! 2 d₀ + (2 + η) d₁ x^η > 0   (no Hopf instability; always true for η > −2)
 //! ```
 
+pub mod branches;
 mod certificate;
 mod equation;
 mod folds;

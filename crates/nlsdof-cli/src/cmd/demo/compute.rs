@@ -14,8 +14,8 @@ use nlsdof::signal_processing::{welch_frf, Symmetry, WelchOptions, Window};
 use nlsdof::simulation::{simulate_excitation, Method, Options};
 use nlsdof::stepped_sine::{run_levels, RigOptions, RigSweep};
 use nlsdof::vector_fitting::{
-    dominant_mode, fit as vf_fit, half_power, modal_parameters, sdof_linear_part, HalfPower,
-    InputKind, LinearPart, OutputKind, VfFit, VfOptions, C64,
+    identify_sdof, HalfPower, InputKind, LinearPart, MeasuredFrf, OutputKind, PoleCount,
+    SdofIdError, SdofIdOptions, SdofIdentification, VfFit, C64,
 };
 use nlsdof::{Model, NormalisedModel, SweepDirection};
 use std::f64::consts::TAU;
@@ -45,6 +45,15 @@ pub const RIG_NOISE_PHASE_DEG: f64 = 0.2;
 pub const TIME_NOISE: f64 = 0.005;
 /// Levels whose spectrograms are drawn (0-based; the paper shows 1, 3, 5).
 pub const SPECTROGRAM_LEVELS: [usize; 3] = [0, 2, 4];
+
+/// The measurement noise of the run, in words (report and `summary.json`).
+pub fn noise_model(rel: f64) -> String {
+    format!(
+        "rig amplitudes a_meas = a (1 + {rel} e1) + {RIG_NOISE_ABS} m * e2, phases phi_meas = phi + {RIG_NOISE_PHASE_DEG} deg * e3; \
+chirp input and output + {CHIRP_NOISE} x their RMS * e; recorded stepped-sine displacement + {TIME_NOISE} x its RMS * e; \
+e independent standard normal (SplitMix64 + Box-Muller, one stream per channel seeded from --seed)"
+    )
+}
 
 /// Run settings.
 #[derive(Debug, Clone)]
@@ -313,7 +322,7 @@ impl Demo {
         self.timings
             .push(("time simulation".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        super::spectra::stage_spectra(self)?;
+        self.stage_spectra()?;
         self.timings
             .push(("spectrograms".into(), t.elapsed().as_secs_f64()));
         Ok(())
@@ -590,6 +599,31 @@ impl Demo {
         Ok(())
     }
 
+    /// Stage 5: STFT spectrograms of the recorded and simulated responses
+    /// and their Eq 33 comparison.
+    fn stage_spectra(&mut self) -> Result<(), CliError> {
+        let total: usize = self.runs.iter().map(|r| r.time.len()).sum();
+        let pb = stage_bar(total as u64, "5/6 spectra");
+        let t = Instant::now();
+        for run in &mut self.runs {
+            pb.set_message(format!("{}: STFT, Eq 33", run.cfg.key));
+            let mut out = Vec::new();
+            for tl in &run.time {
+                out.push(super::spectra::level_spectra(
+                    tl.level,
+                    &tl.measured,
+                    &tl.model,
+                    FS_RECORD,
+                    SPECTROGRAM_LEVELS.contains(&tl.level),
+                )?);
+                pb.inc(1);
+            }
+            run.spectra = out;
+        }
+        done(&pb, "spectrograms", t);
+        Ok(())
+    }
+
     /// Stage 4: full-length time simulation of the stepped-sine test.
     fn stage_time(&mut self) -> Result<(), CliError> {
         let s = self.settings.clone();
@@ -715,26 +749,21 @@ fn h1_in_band(u: &[f64], x: &[f64], opts: &WelchOptions) -> Result<BandH1, CliEr
     ))
 }
 
-fn vf_sdof(f_hz: &[f64], h1: &[C64], mass: f64) -> Result<(VfFit, LinearPart), CliError> {
-    let omega: Vec<f64> = f_hz.iter().map(|f| TAU * f).collect();
-    let fit = vf_fit(
-        &omega,
-        h1,
-        &VfOptions {
-            pole_pairs: 1,
-            constant: true,
-            ..VfOptions::default()
-        },
-    )?;
-    let modes = modal_parameters(&fit);
-    let mode = modes[dominant_mode(&modes)?];
-    let part = sdof_linear_part(
-        &mode,
-        InputKind::Acceleration,
-        OutputKind::Displacement,
-        Some(mass),
-    )?;
-    Ok((fit, part))
+/// The SDoF linear part of a base-acceleration to displacement FRF with a
+/// known mass: vector fitting with one pole pair, and the half-power check.
+fn vf_sdof(f_hz: &[f64], h1: &[C64], mass: f64) -> Result<SdofIdentification, CliError> {
+    let frf = MeasuredFrf::complex(f_hz.iter().map(|f| TAU * f).collect(), h1.to_vec());
+    let opts = SdofIdOptions {
+        poles: PoleCount::Fixed(1),
+        input: InputKind::Acceleration,
+        output: OutputKind::Displacement,
+        mass: Some(mass),
+        ..SdofIdOptions::default()
+    };
+    identify_sdof(&frf, &opts).map_err(|e| match e {
+        SdofIdError::Fit(e) => e.into(),
+        e => CliError::Usage(format!("demo: linear identification: {e}")),
+    })
 }
 
 /// Chirp test of one configuration and its linear identification.
@@ -790,7 +819,7 @@ fn linear_id(cfg: &Config, seed: u64) -> Result<LinearId, CliError> {
             detrend_mean: true,
         },
     )?;
-    let (fit, part) = vf_sdof(&f_hz, &h1, cfg.truth.mass)?;
+    let id = vf_sdof(&f_hz, &h1, cfg.truth.mass)?;
     // For comparison: the textbook Welch set-up (Hann, 3 segments of half
     // the record, 50 % overlap). The window changes appreciably within the
     // ~4.6 s decay time of the resonance, which biases the damping.
@@ -808,20 +837,18 @@ fn linear_id(cfg: &Config, seed: u64) -> Result<LinearId, CliError> {
     )?;
     let hann = vf_sdof(&hf, &hh, cfg.truth.mass)
         .ok()
-        .map(|(_, p)| (p, hav, segment));
-    let omega: Vec<f64> = f_hz.iter().map(|f| TAU * f).collect();
-    // half-power on the mobility |H| ω (a check beside vector fitting)
-    let mob: Vec<f64> = omega.iter().zip(&h1).map(|(w, h)| h.norm() * w).collect();
-    let hp = half_power(&omega, &mob).ok();
+        .and_then(|id| id.linear)
+        .map(|p| (p, hav, segment));
     Ok(LinearId {
         f_hz,
         h1,
         averages,
         segment: u.len(),
         samples: u.len(),
-        fit,
-        part,
-        half_power: hp,
+        // half-power on the mobility |H| ω: a check beside vector fitting
+        half_power: id.half_power.ok(),
+        part: id.linear.expect("a complex FRF is vector fitted"),
+        fit: id.fit.expect("a complex FRF is vector fitted"),
         hann,
     })
 }

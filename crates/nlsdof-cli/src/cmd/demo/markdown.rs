@@ -1,10 +1,11 @@
 //! `report.md`: the figures and tables with a sentence or two on each.
 
 use super::compute::{
-    Demo, CHIRP_F0, CHIRP_F1, CHIRP_GAMMA, CHIRP_RATE, FS_RECORD, F_MAX, F_MIN, LEVELS_PP, SUBSTEPS,
+    noise_model, Demo, CHIRP_F0, CHIRP_F1, CHIRP_GAMMA, CHIRP_RATE, FS_RECORD, F_MAX, F_MIN,
+    LEVELS_PP, SUBSTEPS,
 };
-use super::report::{fmt_noise, sig, Table};
 use super::spectra::FLOOR_FRACTION;
+use super::table::{sig, Table};
 use std::fmt::Write as _;
 
 fn table<'a>(tables: &'a [Table], name: &str) -> &'a Table {
@@ -75,7 +76,7 @@ amplitude, state carried to the next step) at the five levels of Table 2, sweep 
 {F_MIN}–{F_MAX} Hz in {} steps. The rig records the first-harmonic amplitude and phase lag \
 of x. **Noise model:** {}.\n",
         st.steps,
-        fmt_noise(st.noise_rel)
+        noise_model(st.noise_rel)
     );
     s.push_str(&table(tables, "rig").markdown());
     for run in &demo.runs {

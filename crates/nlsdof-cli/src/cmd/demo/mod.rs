@@ -25,6 +25,7 @@ mod markdown;
 mod plots;
 mod report;
 mod spectra;
+mod table;
 
 use crate::error::CliError;
 use compute::{Demo, Settings};

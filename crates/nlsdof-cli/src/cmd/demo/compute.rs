@@ -18,6 +18,7 @@ use nlsdof::vector_fitting::{
     SdofIdError, SdofIdOptions, SdofIdentification, VfFit, C64,
 };
 use nlsdof::{Model, NormalisedModel, SweepDirection};
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
 
@@ -653,29 +654,16 @@ impl Demo {
         pb.set_message("stepped sine, true model + noise vs fitted");
         let t = Instant::now();
         let omegas = s.omegas();
-        let next = std::sync::atomic::AtomicUsize::new(0);
-        let results: std::sync::Mutex<Vec<Option<Result<TimeLevel, CliError>>>> =
-            std::sync::Mutex::new((0..jobs.len()).map(|_| None).collect());
-        let threads = std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .clamp(1, 4);
-        std::thread::scope(|sc| {
-            for _ in 0..threads {
-                sc.spawn(|| loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    if k >= jobs.len() {
-                        break;
-                    }
-                    let r = time_level(&jobs[k], &omegas);
-                    pb.inc(1);
-                    results.lock().expect("no panic while locked")[k] = Some(r);
-                });
-            }
-        });
-        let results = results.into_inner().expect("no panic while locked");
+        let results: Vec<Result<TimeLevel, CliError>> = jobs
+            .par_iter()
+            .map(|job| {
+                let r = time_level(job, &omegas);
+                pb.inc(1);
+                r
+            })
+            .collect();
         for (job, r) in jobs.iter().zip(results) {
-            let r = r.expect("every job ran")?;
+            let r = r?;
             self.runs[job.config].time.push(r);
         }
         done(&pb, "time simulation", t);

@@ -25,7 +25,7 @@
 //! | multi-harmonic balance | [`multi_harmonic`] | |
 //! | [time simulation](#simulate) from a recorded or analytic input | [`simulation::simulate`], [`simulation::simulate_to_vec`], [`simulation::simulate_excitation`] | [`simulation::Trajectory`] |
 //! | [virtual stepped-sine rig](#rig) | [`stepped_sine::run`], [`stepped_sine::run_sweeps`] | [`stepped_sine::RigSweep`] |
-//! | [fit](#fit) of a power-law model to stepped-sine curves | [`identification::identify`] (staged), [`identification::fit`] (Eq 31) | [`identification::Identification`] |
+//! | [fit](#fit) of a power-law model to stepped-sine curves | [`identification::identify()`] (staged), [`identification::fit`] (Eq 31) | [`identification::Identification`] |
 //! | [linear identification](#linear-identification) of an SDoF from an FRF | [`vector_fitting::identify_sdof`] | [`vector_fitting::SdofIdentification`] |
 //! | FRF estimation from time histories | [`signal_processing::welch_frf`], [`signal_processing::spectral_ratio`] | [`signal_processing::FrfEstimate`] |
 //! | [spectrogram comparison](#spectrogram) (Eq 33) | [`signal_processing::compare_records`] | [`signal_processing::SpectrogramComparison`] |

@@ -60,6 +60,43 @@ pub enum FrfFileError {
     },
     #[error("{path}: {message}")]
     Content { path: PathBuf, message: String },
+    /// A MAT channel (read as a signal).
+    #[error(transparent)]
+    Signal(#[from] crate::signal_file::SignalFileError),
+}
+
+/// One channel of a time history and its sampling frequency, Hz: a MAT
+/// variable (by name; a number picks the file's only array) or a channel
+/// of a CSV or Polytec time history ([`read_time_history`],
+/// [`TimeHistory::channel`]: by name or 1-based number). `fs` is the
+/// sampling frequency of a file without a time column.
+pub fn read_channel(
+    path: &Path,
+    key: &str,
+    fs: Option<f64>,
+) -> Result<(f64, Vec<f64>), FrfFileError> {
+    let is_mat = path
+        .extension()
+        .map(|e| e.eq_ignore_ascii_case("mat"))
+        .unwrap_or(false);
+    if is_mat {
+        let var = if key.parse::<usize>().is_ok() {
+            None
+        } else {
+            Some(key)
+        };
+        let s = crate::signal_file::read_signal(path, fs, var)?;
+        return match s.grid {
+            crate::signal_file::SignalGrid::Uniform { fs, .. } => Ok((fs, s.values)),
+            crate::signal_file::SignalGrid::Times(_) => Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!("sampling of {key:?} is not uniform"),
+            }),
+        };
+    }
+    let th = read_time_history(path, fs)?;
+    let v = th.channel(key, path)?.to_vec();
+    Ok((th.fs, v))
 }
 
 /// An FRF table read from CSV.

@@ -16,6 +16,7 @@
 //! * the backbone (undamped free-vibration frequency vs amplitude) dotted grey.
 
 use crate::error::CliError;
+use crate::figure::{colour, GREY, MESH};
 use nlsdof::harmonic_balance::branches::{trace_branches, Branch, BranchOptions};
 use nlsdof::{
     backbone, ForcedResponse, Formulation, NormalisedModel, PhaseQuadrature, Sweep, SweepDirection,
@@ -50,24 +51,6 @@ pub struct FrfPlot<'a> {
     pub f_min: f64,
     pub f_max: f64,
     pub levels: &'a [Level],
-}
-
-/// Tableau-10 without its grey (grey is the backbone).
-const COLOURS: [RGBColor; 9] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(255, 127, 14),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
-const GREY: RGBColor = RGBColor(130, 130, 130);
-
-fn colour(i: usize) -> RGBColor {
-    COLOURS[i % COLOURS.len()]
 }
 
 fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
@@ -215,8 +198,8 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
             .y_label_formatter(&y_fmt)
             .axis_desc_style(("sans-serif", 15))
             .label_style(("sans-serif", 13))
-            .bold_line_style(RGBColor(220, 220, 220))
-            .light_line_style(RGBColor(242, 242, 242))
+            .bold_line_style(MESH.0)
+            .light_line_style(MESH.1)
             .draw()
             .map_err(plot_err)?;
 

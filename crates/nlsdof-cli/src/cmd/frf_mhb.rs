@@ -409,15 +409,6 @@ fn text_output(
     s
 }
 
-const COLOURS: [RGBColor; 6] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-];
-
 fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
     CliError::Usage(format!("plot failed: {e}"))
 }
@@ -464,7 +455,7 @@ fn render(title: &str, levels: &[MhbLevel], f_min: f64, f_max: f64) -> Result<St
             .draw()
             .map_err(plot_err)?;
         for (i, l) in levels.iter().enumerate() {
-            let c = COLOURS[i % COLOURS.len()];
+            let c = crate::figure::colour(i);
             c1.draw_series(LineSeries::new(
                 l.sweep
                     .branch
@@ -547,7 +538,7 @@ fn render(title: &str, levels: &[MhbLevel], f_min: f64, f_max: f64) -> Result<St
             .map_err(plot_err)?;
         let mut labelled = std::collections::HashSet::new();
         for (i, k, pts) in series {
-            let c = COLOURS[i % COLOURS.len()];
+            let c = crate::figure::colour(i);
             let (on, off) = match k {
                 0 => (2, 3),
                 2 => (8, 3),

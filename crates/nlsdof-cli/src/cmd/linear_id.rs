@@ -4,12 +4,12 @@
 //! written as a model file.
 
 use crate::error::CliError;
+use crate::figure::{self, colour, Panel, Series, Style};
 use nlsdof::vector_fitting::{
     identify_sdof, mobility, CircleFit, FrfWeighting, InputKind, MassSource, MeasuredFrf,
     OutputKind, PoleCount, SdofIdError, SdofIdOptions, SdofIdentification, SdofLinear, C64,
 };
 use nlsdof::Model;
-use plotters::prelude::*;
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -511,17 +511,10 @@ fn parse_poles(s: &str, max_pairs: usize) -> Result<PoleCount, CliError> {
     Ok(PoleCount::Fixed(n))
 }
 
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("plot: {e}"))
-}
-
 /// SVG: |H| (log) and phase vs frequency, measured points and fitted curve;
 /// Nyquist plot of the mobility with the fitted model and the circle fit.
 fn render(id: &SdofIdentification, f_hz: &[f64], output: OutputKind) -> Result<String, CliError> {
-    crate::fonts::register();
-    let blue = RGBColor(31, 119, 180);
-    let red = RGBColor(214, 39, 40);
-    let green = RGBColor(44, 160, 44);
+    let (blue, red, green) = (colour(0), colour(1), colour(2));
     let (f0, f1) = (f_hz[0], f_hz[f_hz.len() - 1]);
     let (f0, f1) = if f1 > f0 {
         (f0, f1)
@@ -546,125 +539,99 @@ fn render(id: &SdofIdentification, f_hz: &[f64], output: OutputKind) -> Result<S
     } else {
         (1e-12, 1.0)
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (1200, 640)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (left, right) = root.split_horizontally(700);
-        let (top, bottom) = left.split_vertically(340);
-        let mut ch = ChartBuilder::on(&top)
-            .caption(
-                "Measured (points) and fitted (line) FRF",
-                ("sans-serif", 17),
-            )
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(80)
-            .build_cartesian_2d(f0..f1, (lo..hi).log_scale())
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .y_desc("|H|")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        ch.draw_series(
+    let mut mag = Panel::new(
+        "Measured (points) and fitted (line) FRF",
+        "Frequency [Hz]",
+        "|H|",
+    );
+    mag.log_y = true;
+    mag.x_range = Some((f0, f1));
+    mag.y_range = Some((lo, hi));
+    mag.series.push(
+        Series::new(
             f_hz.iter()
-                .zip(&id.magnitude)
-                .filter(|(_, &m)| pos(m))
-                .map(|(&f, &m)| Circle::new((f, m), 2, blue.stroke_width(1))),
+                .copied()
+                .zip(id.magnitude.iter().copied())
+                .collect(),
+            blue,
+            Style::Dots(2),
         )
-        .map_err(plot_err)?;
-        if !fit_curve.is_empty() {
-            ch.draw_series(LineSeries::new(
-                fit_curve.iter().map(|&(f, z)| (f, z.norm().max(lo))),
-                red.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        }
-        let mut ch = ChartBuilder::on(&bottom)
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .build_cartesian_2d(f0..f1, -180.0..180.0)
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("Frequency [Hz]")
-            .y_desc("Phase [deg]")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        if let Some(h) = &id.values {
-            ch.draw_series(
-                f_hz.iter()
-                    .zip(h)
-                    .map(|(&f, z)| Circle::new((f, z.arg().to_degrees()), 2, blue.stroke_width(1))),
-            )
-            .map_err(plot_err)?;
-        }
-        if !fit_curve.is_empty() {
-            ch.draw_series(
+        .label("measured"),
+    );
+    let mut phase = Panel::new("Phase", "Frequency [Hz]", "Phase [deg]");
+    phase.x_range = Some((f0, f1));
+    phase.y_range = Some((-180.0, 180.0));
+    if let Some(h) = &id.values {
+        phase.series.push(Series::new(
+            f_hz.iter()
+                .zip(h)
+                .map(|(&f, z)| (f, z.arg().to_degrees()))
+                .collect(),
+            blue,
+            Style::Dots(2),
+        ));
+    }
+    if !fit_curve.is_empty() {
+        mag.series.push(
+            Series::new(
                 fit_curve
                     .iter()
-                    .map(|&(f, z)| Circle::new((f, z.arg().to_degrees()), 1, red.filled())),
+                    .map(|&(f, z)| (f, z.norm().max(lo)))
+                    .collect(),
+                red,
+                Style::Line(2),
             )
-            .map_err(plot_err)?;
-        }
-        // Nyquist of the mobility.
-        let mob = |w: f64, z: C64| mobility(w, z, output);
-        let meas: Vec<C64> = match &id.values {
-            Some(h) => id.omega.iter().zip(h).map(|(&w, &z)| mob(w, z)).collect(),
-            None => vec![],
-        };
-        let fitted: Vec<C64> = fit_curve
-            .iter()
-            .map(|&(f, z)| mob(2.0 * PI * f, z))
-            .collect();
-        let mut circle: Vec<C64> = vec![];
-        if let Some(Ok(c)) = &id.circle {
-            circle = (0..=200)
-                .map(|i| c.center + C64::from_polar(c.radius, 2.0 * PI * i as f64 / 200.0))
-                .collect();
-        }
-        let all: Vec<&C64> = meas.iter().chain(&fitted).chain(&circle).collect();
-        let ext = all
-            .iter()
-            .map(|z| z.re.abs().max(z.im.abs()))
-            .filter(|v| v.is_finite())
-            .fold(0.0, f64::max);
-        let ext = if ext > 0.0 { ext * 1.1 } else { 1.0 };
-        let mut ch = ChartBuilder::on(&right)
-            .caption("Nyquist (mobility): data, fit, circle", ("sans-serif", 17))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .build_cartesian_2d(-ext..ext, -ext..ext)
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("Re")
-            .y_desc("Im")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        ch.draw_series(
-            meas.iter()
-                .map(|z| Circle::new((z.re, z.im), 2, blue.stroke_width(1))),
-        )
-        .map_err(plot_err)?;
-        if !fitted.is_empty() {
-            ch.draw_series(LineSeries::new(
-                fitted.iter().map(|z| (z.re, z.im)),
-                red.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        }
-        if !circle.is_empty() {
-            ch.draw_series(LineSeries::new(
-                circle.iter().map(|z| (z.re, z.im)),
-                green.stroke_width(1),
-            ))
-            .map_err(plot_err)?;
-        }
-        root.present().map_err(plot_err)?;
+            .label("vector fit"),
+        );
+        phase.series.push(Series::new(
+            fit_curve
+                .iter()
+                .map(|&(f, z)| (f, z.arg().to_degrees()))
+                .collect(),
+            red,
+            Style::Filled(1),
+        ));
     }
-    Ok(svg)
+    // Nyquist of the mobility.
+    let mob = |w: f64, z: C64| mobility(w, z, output);
+    let meas: Vec<C64> = match &id.values {
+        Some(h) => id.omega.iter().zip(h).map(|(&w, &z)| mob(w, z)).collect(),
+        None => vec![],
+    };
+    let fitted: Vec<C64> = fit_curve
+        .iter()
+        .map(|&(f, z)| mob(2.0 * PI * f, z))
+        .collect();
+    let mut circle: Vec<C64> = vec![];
+    if let Some(Ok(c)) = &id.circle {
+        circle = (0..=200)
+            .map(|i| c.center + C64::from_polar(c.radius, 2.0 * PI * i as f64 / 200.0))
+            .collect();
+    }
+    let ext = meas
+        .iter()
+        .chain(&fitted)
+        .chain(&circle)
+        .map(|z| z.re.abs().max(z.im.abs()))
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let ext = if ext > 0.0 { ext * 1.1 } else { 1.0 };
+    let mut nyquist = Panel::new("Nyquist (mobility): data, fit, circle", "Re", "Im");
+    nyquist.x_range = Some((-ext, ext));
+    nyquist.y_range = Some((-ext, ext));
+    let pts = |v: &[C64]| v.iter().map(|z| (z.re, z.im)).collect::<Vec<_>>();
+    nyquist
+        .series
+        .push(Series::new(pts(&meas), blue, Style::Dots(2)).label("data"));
+    if !fitted.is_empty() {
+        nyquist
+            .series
+            .push(Series::new(pts(&fitted), red, Style::Line(2)).label("fit"));
+    }
+    if !circle.is_empty() {
+        nyquist
+            .series
+            .push(Series::new(pts(&circle), green, Style::Line(1)).label("circle fit"));
+    }
+    figure::render("Linear identification", &[mag, phase, nyquist], 3, 400, 600)
 }

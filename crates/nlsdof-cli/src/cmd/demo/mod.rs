@@ -22,7 +22,6 @@
 
 mod compute;
 mod markdown;
-mod plots;
 mod report;
 mod spectra;
 mod table;

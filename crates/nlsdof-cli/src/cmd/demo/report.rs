@@ -4,10 +4,10 @@ use super::compute::{
     noise_model, Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
     SPECTROGRAM_LEVELS,
 };
-use super::plots::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
 use super::spectra::PLOT_BAND;
 use super::table::{sig, Table};
 use crate::error::CliError;
+use crate::figure::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{PhaseQuadratureRow, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::atomic::write_atomic;

@@ -1,13 +1,16 @@
-//! SVG line plots of the demo: a grid of panels, each with its own axes and
-//! a hand-laid legend (same approach as `crate::plot`: plotters' SVG
-//! backend writes `<text>` elements, so no fonts are needed; the legend is
-//! placed by hand because plotters can only estimate text extents).
+//! The figure layer of every command and of the demo: the palette, and
+//! line figures as a grid of panels, each with its own axes and a
+//! hand-laid legend, drawn by one code path to SVG ([`render`]) or PNG
+//! ([`render_png`]). plotters' SVG backend writes `<text>` elements, so no
+//! fonts are needed to view it; the legend is placed by hand because
+//! plotters can only estimate text extents. Spectrogram heat maps and
+//! waterfalls are in [`crate::png`].
 
 use crate::error::CliError;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-/// Tableau-10 (as `crate::plot`), one colour per input level.
+/// Tableau-10 without its grey, one colour per input level or series.
 pub const COLOURS: [RGBColor; 9] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
@@ -19,9 +22,14 @@ pub const COLOURS: [RGBColor; 9] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
+/// Reference lines, backbones, measured points in the background.
 pub const GREY: RGBColor = RGBColor(150, 150, 150);
+/// Text-like dark lines.
 pub const DARK: RGBColor = RGBColor(40, 40, 40);
+/// Mesh lines of a chart (major, minor).
+pub const MESH: (RGBColor, RGBColor) = (RGBColor(222, 222, 222), RGBColor(244, 244, 244));
 
+/// The `i`-th colour of the palette (cycling).
 pub fn colour(i: usize) -> RGBColor {
     COLOURS[i % COLOURS.len()]
 }
@@ -107,7 +115,7 @@ fn ensure_font() {
 }
 
 fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("demo: cannot draw a figure: {e}"))
+    CliError::Usage(format!("cannot draw a figure: {e}"))
 }
 
 /// Tick label with decimals suited to an axis spanning `span`.
@@ -162,28 +170,63 @@ pub fn render(
     h: u32,
 ) -> Result<String, CliError> {
     ensure_font();
-    let cols = cols.max(1);
-    let rows = panels.len().div_ceil(cols).max(1);
-    let title_h = 40u32;
-    let (width, height) = (w * cols as u32, h * rows as u32 + title_h);
+    let (width, height) = figure_size(panels, cols, w, h);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        root.draw(&Text::new(
-            title.to_string(),
-            (16, 12),
-            ("sans-serif", 19).into_font().color(&BLACK),
-        ))
-        .map_err(plot_err)?;
-        let (_, body) = root.split_vertically(title_h);
-        let areas = body.split_evenly((rows, cols));
-        for (panel, area) in panels.iter().zip(areas.iter()) {
-            draw_panel(&root, area, panel)?;
-        }
-        root.present().map_err(plot_err)?;
+        draw_figure(&root, title, panels, cols)?;
     }
     Ok(svg)
+}
+
+/// The same figure as [`render`], as PNG bytes.
+pub fn render_png(
+    title: &str,
+    panels: &[Panel],
+    cols: usize,
+    w: u32,
+    h: u32,
+) -> Result<Vec<u8>, CliError> {
+    ensure_font();
+    let (width, height) = figure_size(panels, cols, w, h);
+    let mut buf = vec![0u8; width as usize * height as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
+        draw_figure(&root, title, panels, cols)?;
+    }
+    crate::png::encode_png(&buf, width, height)
+}
+
+const TITLE_H: u32 = 40;
+
+fn figure_size(panels: &[Panel], cols: usize, w: u32, h: u32) -> (u32, u32) {
+    let cols = cols.max(1);
+    let rows = panels.len().div_ceil(cols).max(1);
+    (w * cols as u32, h * rows as u32 + TITLE_H)
+}
+
+fn draw_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    panels: &[Panel],
+    cols: usize,
+) -> Result<(), CliError> {
+    let cols = cols.max(1);
+    let rows = panels.len().div_ceil(cols).max(1);
+    root.fill(&WHITE).map_err(plot_err)?;
+    root.draw(&Text::new(
+        title.to_string(),
+        (16, 12),
+        ("sans-serif", 19).into_font().color(&BLACK),
+    ))
+    .map_err(plot_err)?;
+    let (_, body) = root.split_vertically(TITLE_H);
+    let areas = body.split_evenly((rows, cols));
+    for (panel, area) in panels.iter().zip(areas.iter()) {
+        draw_panel(root, area, panel)?;
+    }
+    root.present().map_err(plot_err)?;
+    Ok(())
 }
 
 fn draw_panel<DB: DrawingBackend>(
@@ -248,8 +291,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_label_formatter(&y_fmt)
         .axis_desc_style(("sans-serif", 13))
         .label_style(("sans-serif", 12))
-        .bold_line_style(RGBColor(222, 222, 222))
-        .light_line_style(RGBColor(244, 244, 244))
+        .bold_line_style(MESH.0)
+        .light_line_style(MESH.1)
         .draw()
         .map_err(plot_err)?;
     let inside = |&(x, y): &(f64, f64)| {
@@ -393,7 +436,9 @@ mod tests {
         );
         p.series
             .push(Series::new(vec![(0.5, 1.5)], colour(1), Style::Dots(2)).label("dots"));
-        let svg = render("title", &[p.clone(), p], 2, 400, 300).unwrap();
+        let svg = render("title", &[p.clone(), p.clone()], 2, 400, 300).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("a panel") && svg.contains("dots"));
+        let png = render_png("title", &[p.clone(), p], 2, 400, 300).unwrap();
+        assert!(png.starts_with(b"\x89PNG"));
     }
 }

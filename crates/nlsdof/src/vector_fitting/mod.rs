@@ -96,7 +96,7 @@ pub enum IdentificationError {
 
 /// Validates an FRF: equal lengths, finite values, frequencies `>= 0` and
 /// strictly increasing.
-pub fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), IdentificationError> {
+pub(crate) fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), IdentificationError> {
     if omega.len() != h.len() {
         return Err(IdentificationError::LengthMismatch {
             frequencies: omega.len(),

@@ -60,6 +60,8 @@
 //! * [`signal_processing`] — FRF estimation from time histories (Welch
 //!   H1/H2 and coherence, spectral ratio of a sweep), windows, STFT
 //!   spectrograms and their comparison.
+//! * [`demo`] — the paper's whole workflow on a virtual HAR wing in one
+//!   call (test, identify, simulate, compare), for the `nlsdof demo` report.
 //! * [`special`] — special functions; [`error`] — the shared error types.
 //!
 //! Conventions: SI units; amplitudes and input levels are **zero-to-peak**
@@ -209,6 +211,7 @@
 //! # Ok::<(), nlsdof::signal_processing::ComparisonError>(())
 //! ```
 
+pub mod demo;
 pub mod error;
 pub mod excitation;
 pub mod harmonic_balance;

@@ -1,13 +1,13 @@
 //! Stage 6: figures, tables (markdown + CSV), `summary.json` and `report.md`.
 
-use super::compute::{
-    noise_model, Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
-    SPECTROGRAM_LEVELS,
-};
-use super::spectra::PLOT_BAND;
 use super::table::{sig, Table};
 use crate::error::CliError;
 use crate::figure::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
+use nlsdof::demo::spectra::PLOT_BAND;
+use nlsdof::demo::{
+    noise_model, Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
+    SPECTROGRAM_LEVELS,
+};
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{PhaseQuadratureRow, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::atomic::write_atomic;
@@ -221,7 +221,7 @@ fn fig4(demo: &Demo, dir: &Path) -> Result<(), CliError> {
 }
 
 /// Data (dots) and the fitted model's branch-following sweep (lines).
-fn fit_panel(run: &super::compute::ConfigRun, f: &FitEntry) -> Panel {
+fn fit_panel(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Panel {
     let m = run.measured.as_ref().expect("ran");
     let mut p = Panel::new(
         format!("{}: {}", run.cfg.title, f.label),
@@ -881,7 +881,7 @@ pub fn build_tables(demo: &Demo) -> Vec<Table> {
     tables
 }
 
-fn fit_json(run: &super::compute::ConfigRun, f: &FitEntry) -> Value {
+fn fit_json(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Value {
     let r = &f.result;
     let mass = run.cfg.truth.mass;
     let params: Vec<Value> = (0..N_PARAMS)
@@ -1042,7 +1042,7 @@ fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, CliError> {
 }
 
 pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliError> {
-    let pb = super::compute::stage_bar(8, "6/6 report");
+    let pb = super::progress::stage_bar(8, "6/6 report");
     pb.set_message("figures (SVG, PNG) and tables");
     fig2(demo, dir)?;
     pb.inc(1);

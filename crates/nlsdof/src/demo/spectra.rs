@@ -1,9 +1,9 @@
 //! Stage 5: STFT spectrograms of the recorded and simulated stepped-sine
 //! responses and their Eq 33 comparison (paper §4.5, Fig 8).
 
-use crate::error::CliError;
-use nlsdof::signal_processing::spectrogram_comparison::{compare_records, ComparisonOptions};
-use nlsdof::signal_processing::stft::{Spectrogram, SpectrogramDifference, StftOptions};
+use super::DemoError;
+use crate::signal_processing::spectrogram_comparison::{compare_records, ComparisonOptions};
+use crate::signal_processing::stft::{Spectrogram, SpectrogramDifference, StftOptions};
 
 /// Bins below this fraction of the measured maximum are left out of the
 /// robust Eq 33 (0.01 = −40 dB in amplitude).
@@ -24,20 +24,20 @@ pub struct LevelSpectra {
     pub plot: Option<(Spectrogram, Spectrogram)>,
 }
 
-fn stft_err(e: impl std::fmt::Display) -> CliError {
-    CliError::Usage(format!("demo: spectrogram: {e}"))
+fn stft_err(e: impl std::fmt::Display) -> DemoError {
+    DemoError::Failed(format!("demo: spectrogram: {e}"))
 }
 
 /// The spectrograms of one level's recorded and simulated responses
 /// (sampled at `fs`, Hz) and their Eq 33 difference; with `plot`, the
 /// spectrograms in [`PLOT_BAND`] for the figure.
-pub fn level_spectra(
+pub(crate) fn level_spectra(
     level: usize,
     measured: &[f64],
     model: &[f64],
     fs: f64,
     plot: bool,
-) -> Result<LevelSpectra, CliError> {
+) -> Result<LevelSpectra, DemoError> {
     let opts = ComparisonOptions {
         floor_fraction: FLOOR_FRACTION,
         ..ComparisonOptions::new(StftOptions::paper(measured.len(), fs))

@@ -51,6 +51,8 @@ impl<R: Read> CsvRows<R> {
             .has_headers(false)
             .flexible(true)
             .quoting(false)
+            // lines end at '\n' only (a '\r' before it is trimmed), as `str::lines`
+            .terminator(csv::Terminator::Any(b'\n'))
             .delimiter(if options.decimal_comma { b';' } else { b',' })
             .buffer_capacity(1 << 20)
             .from_reader(read);
@@ -152,6 +154,14 @@ mod tests {
         let row = row.to_vec();
         assert_eq!((line, r.number(&row[1])), (7, Some(-2.25)));
         assert!(r.next_row().unwrap().is_none());
+    }
+
+    #[test]
+    fn lines_end_at_newline_only() {
+        let mut r = CsvRows::new("a,b\r\n1\r2,3\r\n".as_bytes(), CsvOptions::default());
+        assert_eq!(r.next_row().unwrap().unwrap().1, ["a", "b"]);
+        let (line, row) = r.next_row().unwrap().unwrap();
+        assert_eq!((line, row), (2, &["1\r2".to_string(), "3".to_string()][..]));
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //!   optional `[nonlinear_stiffness]` / `[nonlinear_damping]` tables with
 //!   `coefficient` and `exponent`).
 //! * [`csv_table`] — the CSV reader of the table formats (csv crate,
-//!   header-indexed, BOM tolerant, optional decimal comma).
+//!   header-indexed, BOM tolerant, optional decimal comma): stepped-sine
+//!   and phase-resonance data, FRF tables, named signal columns.
 //! * [`atomic`] — write-to-temporary-then-rename output files so a failure or
 //!   Ctrl-C never leaves a partial file behind.
 //! * [`signal_file`] — recorded input signals (CSV `t,accel` or one column

@@ -17,7 +17,7 @@
 
 use crate::error::CliError;
 use crate::figure::{colour, GREY, MESH};
-use nlsdof::harmonic_balance::branches::{trace_branches, Branch, BranchOptions};
+use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
 use nlsdof::{
     backbone, ForcedResponse, Formulation, NormalisedModel, PhaseQuadrature, Sweep, SweepDirection,
 };
@@ -59,7 +59,7 @@ fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
 
 /// All steady-state branches of one level across `[f_min, f_max]` (Hz),
 /// as (Hz, m) polylines.
-pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<Branch>, CliError> {
+pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<TracedBranch>, CliError> {
     let opts = BranchOptions {
         samples: SAMPLES,
         radians_per_unit: 2.0 * PI,
@@ -141,7 +141,7 @@ fn tick_label(v: f64, span: f64) -> String {
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
     crate::fonts::register();
-    let mut level_lines: Vec<Vec<Branch>> = Vec::with_capacity(p.levels.len());
+    let mut level_lines: Vec<Vec<TracedBranch>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {
         let lines = branches(l, p.f_min, p.f_max)?;

@@ -21,7 +21,7 @@
 //! | --- | --- | --- |
 //! | [steady state](#steady-state) at one level and frequency | [`ForcedResponse::steady_states`] | [`RootSet`] |
 //! | [stepped-sine sweep](#sweep) of the first-order balance | [`ForcedResponse::sweep`], [`sweep_levels`] | [`Sweep`] |
-//! | branch tracing for response curves | [`harmonic_balance::branches::trace_branches`] | [`harmonic_balance::branches::Branch`] |
+//! | branch tracing for response curves | [`harmonic_balance::branches::trace_branches`] | [`harmonic_balance::branches::TracedBranch`] |
 //! | multi-harmonic balance | [`multi_harmonic`] | |
 //! | [time simulation](#simulate) from a recorded or analytic input | [`simulation::simulate`], [`simulation::simulate_to_vec`], [`simulation::simulate_excitation`] | [`simulation::Trajectory`] |
 //! | [virtual stepped-sine rig](#rig) | [`stepped_sine::run`], [`stepped_sine::run_sweeps`] | [`stepped_sine::RigSweep`] |

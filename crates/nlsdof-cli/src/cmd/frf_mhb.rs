@@ -6,10 +6,9 @@
 
 use super::roots::jumps_text;
 use crate::error::CliError;
-use nlsdof::multi_harmonic::sweep::{sweep, MhbSweep};
 use nlsdof::multi_harmonic::{
-    harmonic_amplitude, harmonic_phase, max_abs_displacement, regularisation_check,
-    ContinuationOptions, HbSystem, Settings, MAX_HARMONICS,
+    harmonic_amplitude, harmonic_phase, level_sweeps, max_abs_displacement, LevelSweep,
+    MAX_HARMONICS,
 };
 use nlsdof::{Model, SweepDirection};
 use plotters::element::DashedPathElement;
@@ -75,77 +74,6 @@ fn hz(omega: f64) -> f64 {
     omega / (2.0 * PI)
 }
 
-/// One level.
-pub struct MhbLevel {
-    pub gamma: f64,
-    pub sweep: MhbSweep,
-    /// Regularised models only: the regularisation check (ε → ε/4) at the
-    /// swept point of largest first-harmonic amplitude: (f Hz, relative change).
-    pub regularisation: Option<(f64, f64)>,
-}
-
-/// Computes the levels (in memory, nothing written).
-pub fn compute(
-    model: &Model,
-    gammas: &[f64],
-    omegas: &[f64],
-    direction: SweepDirection,
-    h: usize,
-) -> Result<Vec<MhbLevel>, CliError> {
-    let n = model.normalised()?;
-    let mut out = Vec::with_capacity(gammas.len());
-    for &gamma in gammas {
-        let s = sweep(
-            &n,
-            gamma,
-            h,
-            omegas,
-            direction,
-            settings_for(model),
-            &ContinuationOptions::default(),
-        )?;
-        let mut regularisation = None;
-        let mut sys = HbSystem::new(&n, gamma, h, settings_for(model))?;
-        if sys.is_regularised() {
-            if let Some(p) = s.points.iter().max_by(|a, b| {
-                harmonic_amplitude(&a.coefficients, 1)
-                    .total_cmp(&harmonic_amplitude(&b.coefficients, 1))
-            }) {
-                sys.set_samples(s.samples)?;
-                let chk = regularisation_check(&sys, p.omega, &p.coefficients)?;
-                regularisation = Some((hz(p.omega), chk.relative_change));
-            }
-        }
-        out.push(MhbLevel {
-            gamma,
-            sweep: s,
-            regularisation,
-        });
-    }
-    Ok(out)
-}
-
-/// Numerical settings for a model: the defaults, except that a model with a
-/// negative exponent (regularised, e.g. Coulomb friction) uses an aliasing
-/// tolerance of 1e-6 (relative to γ): the truncation error of HB for a
-/// friction jump decays only like 1/H (measured 7e-4 at H = 25, see
-/// docs/multi-harmonic.md) and dominates anyway, while resolving the fixed
-/// regularisation layer to 1e-11 near resonance (velocity ≫ ε) would need
-/// more than the 2^18 samples allowed. For the same reason the
-/// regularisation width is ε_rel = 1e-2 (library default 1e-3): the layer
-/// is resolved with ~10 times fewer samples (a Coulomb sweep through
-/// resonance: 41 s → see docs/multi-harmonic.md).
-pub fn settings_for(model: &Model) -> Settings {
-    let negative = model.nonlinear_stiffness.is_some_and(|t| t.exponent < 0.0)
-        || model.nonlinear_damping.is_some_and(|t| t.exponent < 0.0);
-    let mut s = Settings::default();
-    if negative {
-        s.aliasing_tol = 1e-6;
-        s.regularisation = 1e-2;
-    }
-    s
-}
-
 fn harmonics_json(q: &[f64]) -> Vec<serde_json::Value> {
     let h = (q.len() - 1) / 2;
     (0..=h)
@@ -180,7 +108,7 @@ pub fn run(
 ) -> Result<(), CliError> {
     let h = args.harmonics;
     check_damped(model, "--harmonics")?;
-    let levels = compute(model, gammas, omegas, args.sweep, h)?;
+    let levels = level_sweeps(model, gammas, omegas, args.sweep, h)?;
     for (i, l) in levels.iter().enumerate() {
         if let Some(w) = &l.sweep.warning {
             eprintln!(
@@ -217,7 +145,7 @@ pub fn run(
     Ok(())
 }
 
-fn json_output(args: &Request, model: &Model, levels: &[MhbLevel]) -> String {
+fn json_output(args: &Request, model: &Model, levels: &[LevelSweep]) -> String {
     let lv: Vec<_> = levels
         .iter()
         .map(|l| {
@@ -258,7 +186,7 @@ fn json_output(args: &Request, model: &Model, levels: &[MhbLevel]) -> String {
                 "folds_hz": l.sweep.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
                 "fold_amplitudes": l.sweep.folds.iter().map(|f| f.1).collect::<Vec<_>>(),
                 "samples_per_period": l.sweep.samples,
-                "regularisation_check": l.regularisation.map(|(f, c)| json!({"f_hz": f, "relative_change_eps_over_4": c})),
+                "regularisation_check": l.regularisation.map(|(w, c)| json!({"f_hz": hz(w), "relative_change_eps_over_4": c})),
                 "warning": l.sweep.warning.as_ref().map(|w| w.to_string()),
             })
         })
@@ -275,7 +203,7 @@ fn json_output(args: &Request, model: &Model, levels: &[MhbLevel]) -> String {
     format!("{out}\n")
 }
 
-fn csv_output(args: &Request, levels: &[MhbLevel]) -> String {
+fn csv_output(args: &Request, levels: &[LevelSweep]) -> String {
     let h = args.harmonics;
     let mut s =
         String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking,max_abs_x");
@@ -310,7 +238,7 @@ fn csv_output(args: &Request, levels: &[MhbLevel]) -> String {
 fn text_output(
     args: &Request,
     model: &Model,
-    levels: &[MhbLevel],
+    levels: &[LevelSweep],
     f_min: f64,
     f_max: f64,
 ) -> String {
@@ -396,7 +324,8 @@ fn text_output(
                 f.1
             );
         }
-        if let Some((f, c)) = l.regularisation {
+        if let Some((w, c)) = l.regularisation {
+            let f = hz(w);
             let _ = writeln!(
                 s,
                 "  regularisation     friction/negative exponent smoothed; at the peak ({f:.6} Hz) eps -> eps/4 changes A_1 by {c:.2e} (relative)"
@@ -416,7 +345,7 @@ fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
 /// Two panels: first-harmonic amplitude (branch line, swept markers,
 /// dashed max|x|) and the harmonic content `A_k / A₁` (log scale) of the
 /// swept points.
-fn render(title: &str, levels: &[MhbLevel], f_min: f64, f_max: f64) -> Result<String, CliError> {
+fn render(title: &str, levels: &[LevelSweep], f_min: f64, f_max: f64) -> Result<String, CliError> {
     crate::fonts::register();
     let mut a_max: f64 = 0.0;
     for l in levels {

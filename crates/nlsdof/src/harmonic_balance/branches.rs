@@ -25,7 +25,7 @@ use std::collections::HashMap;
 /// A piece of one branch: points (frequency in the caller's unit, m) with
 /// one stability.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Branch {
+pub struct TracedBranch {
     pub points: Vec<(f64, f64)>,
     pub stable: bool,
 }
@@ -37,15 +37,15 @@ fn key(p: (f64, f64), stable: bool) -> (u64, u64, bool) {
 }
 
 /// Joins segments (generated in increasing frequency) into polylines.
-fn merge(segments: Vec<Segment>) -> Vec<Branch> {
-    let mut lines: Vec<Branch> = Vec::new();
+fn merge(segments: Vec<Segment>) -> Vec<TracedBranch> {
+    let mut lines: Vec<TracedBranch> = Vec::new();
     let mut open: HashMap<(u64, u64, bool), usize> = HashMap::new();
     for (p0, p1, stable) in segments {
         if let Some(idx) = open.remove(&key(p0, stable)) {
             lines[idx].points.push(p1);
             open.insert(key(p1, stable), idx);
         } else {
-            lines.push(Branch {
+            lines.push(TracedBranch {
                 points: vec![p0, p1],
                 stable,
             });
@@ -99,7 +99,7 @@ pub fn trace_branches(
     f_min: f64,
     f_max: f64,
     opts: &BranchOptions,
-) -> Result<Vec<Branch>, SolveError> {
+) -> Result<Vec<TracedBranch>, SolveError> {
     let unit = opts.radians_per_unit;
     let n = opts.samples.max(2);
     let fold_hz: Vec<f64> = folds.iter().map(|f| f.omega / unit).collect();
@@ -207,7 +207,7 @@ mod tests {
         assert_eq!(lines.iter().filter(|p| !p.stable).count(), 1);
         for fold in &l.1.folds {
             let fp = (fold.omega / (2.0 * PI), fold.amplitude);
-            let touching: Vec<&Branch> = lines
+            let touching: Vec<&TracedBranch> = lines
                 .iter()
                 .filter(|p| p.points.first() == Some(&fp) || p.points.last() == Some(&fp))
                 .collect();

@@ -18,9 +18,7 @@
 use crate::error::CliError;
 use crate::figure::{colour, GREY, MESH};
 use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
-use nlsdof::{
-    backbone, ForcedResponse, Formulation, NormalisedModel, PhaseQuadrature, Sweep, SweepDirection,
-};
+use nlsdof::{backbone, Formulation, LevelResponse, NormalisedModel, SweepDirection};
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use std::f64::consts::PI;
@@ -33,14 +31,6 @@ const LEGEND_WIDTH: u32 = 250;
 /// Largest number of swept-point markers drawn per level.
 const MAX_MARKERS: usize = 100;
 
-/// Result of one input level of `frf` (what the plot draws of it).
-pub struct Level {
-    pub gamma: f64,
-    pub response: ForcedResponse,
-    pub sweep: Sweep,
-    pub phase_quadrature: Option<PhaseQuadrature>,
-}
-
 /// Everything the plot needs.
 pub struct FrfPlot<'a> {
     pub title: String,
@@ -50,7 +40,7 @@ pub struct FrfPlot<'a> {
     /// Band, Hz.
     pub f_min: f64,
     pub f_max: f64,
-    pub levels: &'a [Level],
+    pub levels: &'a [LevelResponse],
 }
 
 fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
@@ -59,7 +49,11 @@ fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
 
 /// All steady-state branches of one level across `[f_min, f_max]` (Hz),
 /// as (Hz, m) polylines.
-pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<TracedBranch>, CliError> {
+pub fn branches(
+    level: &LevelResponse,
+    f_min: f64,
+    f_max: f64,
+) -> Result<Vec<TracedBranch>, CliError> {
     let opts = BranchOptions {
         samples: SAMPLES,
         radians_per_unit: 2.0 * PI,
@@ -381,14 +375,14 @@ mod tests {
             .unwrap()
     }
 
-    fn level(model: &Model, gamma: f64, f_min: f64, f_max: f64, steps: usize) -> Level {
+    fn level(model: &Model, gamma: f64, f_min: f64, f_max: f64, steps: usize) -> LevelResponse {
         let response = ForcedResponse::new(model, gamma, Formulation::HarmonicBalance).unwrap();
         let omegas: Vec<f64> = (0..steps)
             .map(|i| 2.0 * PI * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64))
             .collect();
         let sweep = response.sweep(&omegas, SweepDirection::Up).unwrap();
         let phase_quadrature = response.phase_quadrature().unwrap();
-        Level {
+        LevelResponse {
             gamma,
             response,
             sweep,

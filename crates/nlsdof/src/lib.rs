@@ -20,7 +20,7 @@
 //! | task | entry point | result |
 //! | --- | --- | --- |
 //! | [steady state](#steady-state) at one level and frequency | [`ForcedResponse::steady_states`] | [`RootSet`] |
-//! | [stepped-sine sweep](#sweep) of the first-order balance | [`ForcedResponse::sweep`], [`sweep_levels`] | [`Sweep`] |
+//! | [stepped-sine sweep](#sweep) of the first-order balance | [`ForcedResponse::sweep`], [`sweep_levels`], [`level_responses`] | [`Sweep`], [`LevelResponse`] |
 //! | branch tracing for response curves | [`harmonic_balance::branches::trace_branches`] | [`harmonic_balance::branches::TracedBranch`] |
 //! | multi-harmonic balance | [`multi_harmonic`] | |
 //! | [time simulation](#simulate) from a recorded or analytic input | [`simulation::simulate`], [`simulation::simulate_to_vec`], [`simulation::simulate_excitation`] | [`simulation::Trajectory`] |
@@ -228,8 +228,9 @@ pub mod vector_fitting;
 
 pub use error::{ParameterError, SolveError};
 pub use harmonic_balance::{
-    backbone, sweep_levels, Fold, ForcedResponse, Formulation, Jump, NoMotion, PhaseQuadrature,
-    RootSet, SteadyState, Sweep, SweepDirection, SweepPoint,
+    backbone, level_responses, sweep_levels, Fold, ForcedResponse, Formulation, Jump,
+    LevelResponse, NoMotion, PhaseQuadrature, RootSet, SteadyState, Sweep, SweepDirection,
+    SweepPoint,
 };
 pub use model::{Model, NormalisedModel};
 pub use power_law::PowerLaw;

@@ -7,8 +7,8 @@ use super::roots::{
     FormulationArg,
 };
 use crate::error::CliError;
-use crate::plot::{self, Level};
-use nlsdof::{ForcedResponse, NoMotion, SweepDirection};
+use crate::plot;
+use nlsdof::{level_responses, LevelResponse, NoMotion, SweepDirection};
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -204,18 +204,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         return super::frf_mhb::run(&request, &model, &gammas, &omegas, f_min, f_max);
     }
 
-    let mut levels = Vec::with_capacity(gammas.len());
-    for &gamma in &gammas {
-        let response = ForcedResponse::new(&model, gamma, formulation)?;
-        let sweep = response.sweep(&omegas, args.sweep.to_core())?;
-        let phase_quadrature = response.phase_quadrature()?;
-        levels.push(Level {
-            gamma,
-            response,
-            sweep,
-            phase_quadrature,
-        });
-    }
+    let levels = level_responses(&model, &gammas, &omegas, args.sweep.to_core(), formulation)?;
 
     let mut stdout_text = if args.json {
         json_output(&args, &model, &levels)
@@ -254,7 +243,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     Ok(())
 }
 
-fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
+fn json_output(args: &Args, model: &nlsdof::Model, levels: &[LevelResponse]) -> String {
     let lv: Vec<_> = levels
         .iter()
         .map(|l| {
@@ -323,7 +312,7 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
 /// `sticking` flag each point. A sticking point (no steady motion) has
 /// amplitude 0 and an empty phase (there is no phase to report); a point
 /// without a finite steady state (undamped resonance) has both empty.
-fn csv_output(levels: &[Level]) -> String {
+fn csv_output(levels: &[LevelResponse]) -> String {
     let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking\n");
     for (i, l) in levels.iter().enumerate() {
         let sweep = match l.sweep.direction {
@@ -361,7 +350,7 @@ fn csv_output(levels: &[Level]) -> String {
 fn text_output(
     args: &Args,
     model: &nlsdof::Model,
-    levels: &[Level],
+    levels: &[LevelResponse],
     f_min: f64,
     f_max: f64,
 ) -> String {

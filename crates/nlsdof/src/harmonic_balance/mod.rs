@@ -442,6 +442,46 @@ pub fn modulation_frequencies(
     Ok(Some((wn * (centre - half), wn * (centre + half))))
 }
 
+/// One input level's forced response, its stepped-sine sweep and its
+/// phase-quadrature point ([`level_responses`]).
+#[derive(Debug, Clone)]
+pub struct LevelResponse {
+    /// γ, m/s² zero-to-peak.
+    pub gamma: f64,
+    pub response: ForcedResponse,
+    pub sweep: Sweep,
+    pub phase_quadrature: Option<PhaseQuadrature>,
+}
+
+/// The response of `model` at each level of `gammas` (m/s², zero-to-peak):
+/// the sweep over the increasing `omegas` (rad/s) in `direction` and the
+/// phase-quadrature point; levels computed in parallel (rayon), results in
+/// the order of `gammas` (on failure, the first failing level's error).
+pub fn level_responses(
+    model: &Model,
+    gammas: &[f64],
+    omegas: &[f64],
+    direction: SweepDirection,
+    formulation: Formulation,
+) -> Result<Vec<LevelResponse>, SolveError> {
+    use rayon::prelude::*;
+    let levels: Vec<Result<LevelResponse, SolveError>> = gammas
+        .par_iter()
+        .map(|&gamma| {
+            let response = ForcedResponse::new(model, gamma, formulation)?;
+            let sweep = response.sweep(omegas, direction)?;
+            let phase_quadrature = response.phase_quadrature()?;
+            Ok(LevelResponse {
+                gamma,
+                response,
+                sweep,
+                phase_quadrature,
+            })
+        })
+        .collect();
+    levels.into_iter().collect()
+}
+
 /// Stepped-sine sweeps of one model at several input levels `gammas`
 /// (m/s², zero-to-peak) over the same increasing frequencies `omegas`
 /// (rad/s), levels computed in parallel (rayon). Results are identical to

@@ -33,6 +33,9 @@
 //!     (mid-step) sample is the cubic Hermite interpolant of
 //!     `(x, v, a)` at the step ends (`x_mid = (x₀+x₁)/2 + h (v₀−v₁)/8`,
 //!     `v_mid = (v₀+v₁)/2 + h (a₀−a₁)/8`), O(h⁴) like the method.
+//! * **RK4 on a cubic-upsampled input** ([`simulate_upsampled`]): a
+//!   uniformly sampled record upsampled by cubics, two fine samples per
+//!   step, in chunks; the state at every original sample.
 //! * **Dormand–Prince 5(4)** with embedded error control and the 4th-order
 //!   continuous extension ([`Method::DormandPrince`]), the accuracy
 //!   reference. It treats the input as piecewise linear and **restarts at
@@ -89,8 +92,10 @@ mod dopri;
 pub(crate) mod law;
 pub(crate) mod rk4;
 pub(crate) mod rk4_step;
+mod upsampled;
 
 pub use crate::error::SimulationError;
+pub use upsampled::{simulate_upsampled, Upsampling};
 
 use crate::excitation::{Excitation, SampledInput};
 use crate::model::NormalisedModel;

@@ -40,6 +40,8 @@ pub enum Style {
     Line(u32),
     /// Dashed line of the given width.
     Dashed(u32),
+    /// Dashed line: width, dash and gap lengths (pixels).
+    DashPattern(u32, u32, u32),
     /// Hollow circles of the given radius.
     Dots(u32),
     /// Filled circles of the given radius.
@@ -317,6 +319,16 @@ fn draw_panel<DB: DrawingBackend>(
                     .draw_series(DashedLineSeries::new(pts, 6, 4, s.colour.stroke_width(wd)))
                     .map_err(plot_err)?;
             }
+            Style::DashPattern(wd, on, off) => {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        pts,
+                        on.max(1),
+                        off,
+                        s.colour.stroke_width(wd),
+                    ))
+                    .map_err(plot_err)?;
+            }
             Style::Dots(r) => {
                 chart
                     .draw_series(
@@ -390,6 +402,14 @@ fn draw_panel<DB: DrawingBackend>(
                     6,
                     4,
                     s.colour.stroke_width(wd.max(2)),
+                ))
+                .map_err(plot_err)?,
+            Style::DashPattern(wd, on, off) => root
+                .draw(&DashedPathElement::new(
+                    vec![(lx0, y), (lx1, y)],
+                    on.max(1),
+                    off,
+                    s.colour.stroke_width(wd.max(1)),
                 ))
                 .map_err(plot_err)?,
             Style::Dots(r) => root

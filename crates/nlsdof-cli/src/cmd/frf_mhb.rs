@@ -6,13 +6,12 @@
 
 use super::roots::jumps_text;
 use crate::error::CliError;
+use crate::figure::{self, colour, Corner, Panel, Series, Style};
 use nlsdof::multi_harmonic::{
     harmonic_amplitude, harmonic_phase, level_sweeps, max_abs_displacement, LevelSweep,
     MAX_HARMONICS,
 };
 use nlsdof::{Model, SweepDirection};
-use plotters::element::DashedPathElement;
-use plotters::prelude::*;
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -338,15 +337,10 @@ fn text_output(
     s
 }
 
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("plot failed: {e}"))
-}
-
 /// Two panels: first-harmonic amplitude (branch line, swept markers,
 /// dashed max|x|) and the harmonic content `A_k / A₁` (log scale) of the
 /// swept points.
 fn render(title: &str, levels: &[LevelSweep], f_min: f64, f_max: f64) -> Result<String, CliError> {
-    crate::fonts::register();
     let mut a_max: f64 = 0.0;
     for l in levels {
         for p in &l.sweep.branch {
@@ -364,141 +358,95 @@ fn render(title: &str, levels: &[LevelSweep], f_min: f64, f_max: f64) -> Result<
     } else {
         ("mm", 1e3)
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (1100, 900)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (top, bottom) = root.split_vertically(520);
-        let mut c1 = ChartBuilder::on(&top)
-            .caption(title, ("sans-serif", 18))
-            .margin(14)
-            .x_label_area_size(40)
-            .y_label_area_size(78)
-            .build_cartesian_2d(f_min..f_max, 0.0..a_max * 1.08 * scale)
-            .map_err(plot_err)?;
-        c1.configure_mesh()
-            .x_desc("Frequency f [Hz]")
-            .y_desc(format!("First harmonic A1 [{unit}]; dashed: max|x|"))
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .draw()
-            .map_err(plot_err)?;
-        for (i, l) in levels.iter().enumerate() {
-            let c = crate::figure::colour(i);
-            c1.draw_series(LineSeries::new(
-                l.sweep
-                    .branch
-                    .iter()
-                    .filter(|p| hz(p.omega) >= f_min && hz(p.omega) <= f_max)
-                    .map(|p| (hz(p.omega), p.amplitude(1) * scale)),
-                c.stroke_width(2),
-            ))
-            .map_err(plot_err)?
-            .label(format!("γ = {}", l.gamma))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
-            c1.draw_series(DashedLineSeries::new(
-                l.sweep
-                    .points
-                    .iter()
-                    .map(|p| (hz(p.omega), max_abs_displacement(&p.coefficients) * scale)),
-                5,
-                4,
-                c.stroke_width(1),
-            ))
-            .map_err(plot_err)?;
-            let step = l.sweep.points.len().div_ceil(100).max(1);
-            c1.draw_series(l.sweep.points.iter().step_by(step).map(|p| {
-                let pt = (hz(p.omega), harmonic_amplitude(&p.coefficients, 1) * scale);
-                if p.stable {
-                    Circle::new(pt, 2, c.filled())
-                } else {
-                    Circle::new(pt, 3, c.stroke_width(1))
-                }
-            }))
-            .map_err(plot_err)?;
-        }
-        c1.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_err)?;
-
-        // harmonic content, log10(A_k / A_1)
-        let h = levels
-            .first()
-            .and_then(|l| l.sweep.points.first())
-            .map(|p| (p.coefficients.len() - 1) / 2)
-            .unwrap_or(1);
-        let mut lo: f64 = -1.0;
-        let mut series: Vec<(usize, usize, Vec<(f64, f64)>)> = Vec::new();
-        for (i, l) in levels.iter().enumerate() {
-            for k in (0..=h).filter(|&k| k != 1).take(6) {
-                let pts: Vec<(f64, f64)> = l
-                    .sweep
-                    .points
-                    .iter()
-                    .filter_map(|p| {
-                        let r = harmonic_amplitude(&p.coefficients, k)
-                            / harmonic_amplitude(&p.coefficients, 1);
-                        (r > 1e-12).then(|| (hz(p.omega), r.log10()))
-                    })
-                    .collect();
-                for &(_, v) in &pts {
-                    lo = lo.min(v);
-                }
-                if !pts.is_empty() {
-                    series.push((i, k, pts));
-                }
-            }
-        }
-        let lo = lo.floor().max(-12.0);
-        let mut c2 = ChartBuilder::on(&bottom)
-            .margin(14)
-            .x_label_area_size(40)
-            .y_label_area_size(78)
-            .build_cartesian_2d(f_min..f_max, lo..0.5)
-            .map_err(plot_err)?;
-        c2.configure_mesh()
-            .x_desc("Frequency f [Hz]")
-            .y_desc("log10(A_k / A_1), swept points")
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .draw()
-            .map_err(plot_err)?;
-        let mut labelled = std::collections::HashSet::new();
-        for (i, k, pts) in series {
-            let c = crate::figure::colour(i);
-            let (on, off) = match k {
-                0 => (2, 3),
-                2 => (8, 3),
-                3 => (1, 0),
-                _ => (4, 2),
-            };
-            let style = c.stroke_width(if k == 3 { 2 } else { 1 });
-            let s = if off == 0 {
-                c2.draw_series(LineSeries::new(pts, style))
-                    .map_err(plot_err)?
-            } else {
-                c2.draw_series(DashedLineSeries::new(pts, on, off, style))
-                    .map_err(plot_err)?
-            };
-            if labelled.insert(k) {
-                s.label(format!("k = {k}")).legend(move |(x, y)| {
-                    DashedPathElement::new(
-                        vec![(x, y), (x + 20, y)],
-                        on.max(1),
-                        off,
-                        BLACK.stroke_width(1),
-                    )
-                });
-            }
-        }
-        c2.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_err)?;
-        root.present().map_err(plot_err)?;
+    let mut amp = Panel::new(
+        "First harmonic",
+        "Frequency f [Hz]",
+        &format!("First harmonic A1 [{unit}]; dashed: max|x|"),
+    );
+    amp.x_range = Some((f_min, f_max));
+    amp.y_range = Some((0.0, a_max * 1.08 * scale));
+    amp.legend = Corner::Outside;
+    for (i, l) in levels.iter().enumerate() {
+        let c = colour(i);
+        let branch = l
+            .sweep
+            .branch
+            .iter()
+            .filter(|p| hz(p.omega) >= f_min && hz(p.omega) <= f_max)
+            .map(|p| (hz(p.omega), p.amplitude(1) * scale))
+            .collect();
+        amp.series
+            .push(Series::new(branch, c, Style::Line(2)).label(format!("γ = {}", l.gamma)));
+        let max_x = l
+            .sweep
+            .points
+            .iter()
+            .map(|p| (hz(p.omega), max_abs_displacement(&p.coefficients) * scale))
+            .collect();
+        amp.series
+            .push(Series::new(max_x, c, Style::DashPattern(1, 5, 4)));
+        let step = l.sweep.points.len().div_ceil(100).max(1);
+        let marks = |stable: bool| {
+            l.sweep
+                .points
+                .iter()
+                .step_by(step)
+                .filter(|p| p.stable == stable)
+                .map(|p| (hz(p.omega), harmonic_amplitude(&p.coefficients, 1) * scale))
+                .collect::<Vec<_>>()
+        };
+        amp.series
+            .push(Series::new(marks(true), c, Style::Filled(2)));
+        amp.series
+            .push(Series::new(marks(false), c, Style::Dots(3)));
     }
-    Ok(svg)
+    // harmonic content A_k / A_1
+    let h = levels
+        .first()
+        .and_then(|l| l.sweep.points.first())
+        .map(|p| (p.coefficients.len() - 1) / 2)
+        .unwrap_or(1);
+    let mut lo: f64 = -1.0;
+    let mut content = Panel::new(
+        "Harmonic content",
+        "Frequency f [Hz]",
+        "A_k / A_1, swept points",
+    );
+    content.log_y = true;
+    content.legend = Corner::Outside;
+    let mut labelled = std::collections::HashSet::new();
+    for (i, l) in levels.iter().enumerate() {
+        for k in (0..=h).filter(|&k| k != 1).take(6) {
+            let pts: Vec<(f64, f64)> = l
+                .sweep
+                .points
+                .iter()
+                .filter_map(|p| {
+                    let r = harmonic_amplitude(&p.coefficients, k)
+                        / harmonic_amplitude(&p.coefficients, 1);
+                    (r > 1e-12).then(|| (hz(p.omega), r))
+                })
+                .collect();
+            for &(_, v) in &pts {
+                lo = lo.min(v.log10());
+            }
+            if pts.is_empty() {
+                continue;
+            }
+            let style = match k {
+                0 => Style::DashPattern(1, 2, 3),
+                2 => Style::DashPattern(1, 8, 3),
+                3 => Style::Line(2),
+                _ => Style::DashPattern(1, 4, 2),
+            };
+            let mut s = Series::new(pts, colour(i), style);
+            if labelled.insert(k) {
+                s = s.label(format!("k = {k}"));
+            }
+            content.series.push(s);
+        }
+    }
+    content.x_range = Some((f_min, f_max));
+    content.y_range = Some((10f64.powf(lo.floor().max(-12.0)), 10f64.powf(0.5)));
+    figure::render(title, &[amp, content], 1, 1100, 430)
 }

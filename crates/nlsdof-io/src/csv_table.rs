@@ -122,6 +122,47 @@ pub fn number(field: &str, options: CsvOptions) -> Option<f64> {
     }
 }
 
+/// One data row of a table whose header names `width` columns: fields by
+/// column index, with the messages of the table readers (the caller adds
+/// file and line).
+pub struct Row<'a> {
+    fields: &'a [String],
+}
+
+impl<'a> Row<'a> {
+    /// `fields`, at most `width` of them (a missing trailing field is
+    /// reported when asked for).
+    pub fn new(fields: &'a [String], width: usize) -> Result<Self, String> {
+        if fields.len() > width {
+            return Err(format!(
+                "{} fields, but the header names {width} columns",
+                fields.len()
+            ));
+        }
+        Ok(Self { fields })
+    }
+
+    /// Field `c`, named `name` in the message if it is missing.
+    pub fn field(&self, c: usize, name: &str) -> Result<&'a str, String> {
+        self.fields
+            .get(c)
+            .map(String::as_str)
+            .ok_or_else(|| format!("missing field '{name}'"))
+    }
+
+    /// Field `c` as a number.
+    pub fn number(&self, c: usize, name: &str) -> Result<f64, String> {
+        let s = self.field(c, name)?;
+        s.parse::<f64>()
+            .map_err(|_| format!("{name} = '{s}' is not a number"))
+    }
+}
+
+/// The header's names in lower case.
+pub fn lowercase(header: &[String]) -> Vec<String> {
+    header.iter().map(|c| c.to_ascii_lowercase()).collect()
+}
+
 /// Index of the header name `name` (case-insensitive) among `header`.
 pub fn column(header: &[String], name: &str) -> Option<usize> {
     header.iter().position(|h| h.eq_ignore_ascii_case(name))

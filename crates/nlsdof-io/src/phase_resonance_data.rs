@@ -12,7 +12,7 @@
 //! zero-to-peak unless [`ReadOptions::peak_to_peak`] halves both — the same
 //! options as the sweep reader ([`crate::stepped_sine_data`]).
 
-use crate::csv_table::{column, CsvOptions, CsvReadError, CsvRows};
+use crate::csv_table::{column, lowercase, CsvOptions, CsvReadError, CsvRows, Row};
 use crate::stepped_sine_data::{AmplitudeKind, ReadOptions, STANDARD_GRAVITY};
 use nlsdof::identification::phase_resonance::{PrDataError, PrDataset, PrPoint};
 use std::path::{Path, PathBuf};
@@ -58,7 +58,7 @@ pub fn parse_csv(
             source: PrDataError::Empty,
         });
     };
-    let cols: Vec<String> = header.iter().map(|c| c.to_ascii_lowercase()).collect();
+    let cols = lowercase(header);
     let find = |name: &'static str| column(&cols, name);
     let need = |name: &'static str| {
         find(name).ok_or(PhaseResonanceDataError::MissingColumn {
@@ -81,24 +81,9 @@ pub fn parse_csv(
             line: lineno as usize,
             message,
         };
-        if fields.len() > cols.len() {
-            return Err(err(format!(
-                "{} fields, but the header names {} columns",
-                fields.len(),
-                cols.len()
-            )));
-        }
-        let get = |c: usize, name: &str| {
-            fields
-                .get(c)
-                .map(String::as_str)
-                .ok_or_else(|| err(format!("missing field '{name}'")))
-        };
-        let num = |c: usize, name: &str| -> Result<f64, PhaseResonanceDataError> {
-            let s = get(c, name)?;
-            s.parse::<f64>()
-                .map_err(|_| err(format!("{name} = '{s}' is not a number")))
-        };
+        let row = Row::new(fields, cols.len()).map_err(err)?;
+        let get = |c: usize, name: &str| row.field(c, name).map_err(err);
+        let num = |c: usize, name: &str| row.number(c, name).map_err(err);
         let f = num(cf, "f_hz")?;
         let omega = TWO_PI * f;
         let gamma = num(cg, "gamma")? * pp * g_unit;

@@ -15,7 +15,7 @@
 //!   phases are relative to the vibrometer's reference channel, not a lag
 //!   behind the base acceleration, so they are not used.
 
-use crate::csv_table::{column, CsvOptions, CsvReadError, CsvRows};
+use crate::csv_table::{column, lowercase, CsvOptions, CsvReadError, CsvRows, Row};
 use nlsdof::identification::{DataError, Dataset, Record};
 use nlsdof::SweepDirection;
 use std::path::{Path, PathBuf};
@@ -113,7 +113,7 @@ pub fn parse_csv(
             source: DataError::Empty,
         });
     };
-    let cols: Vec<String> = header.iter().map(|c| c.to_ascii_lowercase()).collect();
+    let cols = lowercase(header);
     let find = |name: &'static str| column(&cols, name);
     let need = |name: &'static str| {
         find(name).ok_or(SteppedSineDataError::MissingColumn {
@@ -135,24 +135,9 @@ pub fn parse_csv(
             line: lineno as usize,
             message,
         };
-        if fields.len() > cols.len() {
-            return Err(err(format!(
-                "{} fields, but the header names {} columns",
-                fields.len(),
-                cols.len()
-            )));
-        }
-        let get = |c: usize, name: &str| {
-            fields
-                .get(c)
-                .map(String::as_str)
-                .ok_or_else(|| err(format!("missing field '{name}'")))
-        };
-        let num = |c: usize, name: &str| -> Result<f64, SteppedSineDataError> {
-            let s = get(c, name)?;
-            s.parse::<f64>()
-                .map_err(|_| err(format!("{name} = '{s}' is not a number")))
-        };
+        let row = Row::new(fields, cols.len()).map_err(err)?;
+        let get = |c: usize, name: &str| row.field(c, name).map_err(err);
+        let num = |c: usize, name: &str| row.number(c, name).map_err(err);
         let level = get(cl, "level")?.to_string();
         let f = num(cf, "f_hz")?;
         let omega = TWO_PI * f;

@@ -46,6 +46,9 @@ pub enum Style {
     Dots(u32),
     /// Filled circles of the given radius.
     Filled(u32),
+    /// Arrows of the given width, one from each even-indexed point to the
+    /// next (e.g. a jump of a sweep), heads in pixels.
+    Arrow(u32),
 }
 
 #[derive(Debug, Clone)]
@@ -92,6 +95,8 @@ pub struct Panel {
     pub legend: Corner,
     /// Logarithmic y axis (values <= 0 are dropped).
     pub log_y: bool,
+    /// Tick label of a value on a linear axis of the given span.
+    pub tick_format: fn(f64, f64) -> String,
 }
 
 impl Panel {
@@ -105,6 +110,7 @@ impl Panel {
             y_range: None,
             legend: Corner::TopLeft,
             log_y: false,
+            tick_format: tick,
         }
     }
 }
@@ -181,7 +187,9 @@ pub fn render(
     Ok(svg)
 }
 
-/// The same figure as [`render`], as PNG bytes.
+/// The same figure as [`render`], as PNG bytes (drawn by the same code on
+/// the bitmap backend; no command writes a PNG line figure yet).
+#[cfg_attr(not(test), allow(dead_code))]
 pub fn render_png(
     title: &str,
     panels: &[Panel],
@@ -264,7 +272,8 @@ fn draw_panel<DB: DrawingBackend>(
     };
     let ((x0, x1), (y0, y1)) = auto_range(panel);
     let (xs, ys) = (x1 - x0, y1 - y0);
-    let x_fmt = |v: &f64| tick(*v, xs);
+    let fmt = panel.tick_format;
+    let x_fmt = |v: &f64| fmt(*v, xs);
     let log_y = panel.log_y;
     let y_fmt = move |v: &f64| {
         if log_y {
@@ -272,7 +281,7 @@ fn draw_panel<DB: DrawingBackend>(
             let d = (1.0 - p.log10().floor()).clamp(0.0, 8.0) as usize;
             format!("{p:.d$}")
         } else {
-            tick(*v, ys)
+            fmt(*v, ys)
         }
     };
     let mut chart = ChartBuilder::on(area)
@@ -348,6 +357,13 @@ fn draw_panel<DB: DrawingBackend>(
                             .map(|&p| Circle::new(p, r, s.colour.filled())),
                     )
                     .map_err(plot_err)?;
+            }
+            Style::Arrow(wd) => {
+                for pair in s.points.chunks_exact(2) {
+                    let from = chart.backend_coord(&pair[0]);
+                    let to = chart.backend_coord(&pair[1]);
+                    draw_arrow(root, from, to, s.colour, wd)?;
+                }
             }
         }
     }
@@ -426,11 +442,41 @@ fn draw_panel<DB: DrawingBackend>(
                     s.colour.filled(),
                 ))
                 .map_err(plot_err)?,
+            Style::Arrow(wd) => {
+                let x = (lx0 + lx1) / 2;
+                draw_arrow(root, (x, y - row / 2), (x, y + row / 2), s.colour, wd)?
+            }
         }
         root.draw(&Text::new(
             s.label.clone().unwrap_or_default(),
             (bx + 40, y - font / 2 - 1),
             ("sans-serif", font as u32).into_font().color(&BLACK),
+        ))
+        .map_err(plot_err)?;
+    }
+    Ok(())
+}
+
+/// A vertical arrow in pixels (`from` and `to` share x), head at `to`.
+fn draw_arrow<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    from: (i32, i32),
+    to: (i32, i32),
+    c: RGBColor,
+    width: u32,
+) -> Result<(), CliError> {
+    let dy = to.1 - from.1;
+    let head = 9.min(dy.abs());
+    let base = to.1 - dy.signum() * head;
+    root.draw(&PathElement::new(
+        vec![from, (to.0, base)],
+        c.stroke_width(width),
+    ))
+    .map_err(plot_err)?;
+    if head > 0 {
+        root.draw(&Polygon::new(
+            vec![(to.0 - 5, base), (to.0 + 5, base), to],
+            c.filled(),
         ))
         .map_err(plot_err)?;
     }

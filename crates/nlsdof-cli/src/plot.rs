@@ -16,18 +16,20 @@
 //! * the backbone (undamped free-vibration frequency vs amplitude) dotted grey.
 
 use crate::error::CliError;
-use crate::figure::{colour, GREY, MESH};
+use crate::figure::{self, colour, Corner, Panel, Series, Style, GREY};
 use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
 use nlsdof::{backbone, Formulation, LevelResponse, NormalisedModel, SweepDirection};
-use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use std::f64::consts::PI;
+
+/// Unstable branches and the backbone.
+const UNSTABLE: Style = Style::DashPattern(2, 7, 5);
+const BACKBONE: Style = Style::DashPattern(2, 2, 4);
 
 /// Frequencies sampled for the branches (plus the folds).
 const SAMPLES: usize = 600;
 const WIDTH: u32 = 1100;
 const HEIGHT: u32 = 640;
-const LEGEND_WIDTH: u32 = 250;
 /// Largest number of swept-point markers drawn per level.
 const MAX_MARKERS: usize = 100;
 
@@ -41,10 +43,6 @@ pub struct FrfPlot<'a> {
     pub f_min: f64,
     pub f_max: f64,
     pub levels: &'a [LevelResponse],
-}
-
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("cannot draw the plot: {e}"))
 }
 
 /// All steady-state branches of one level across `[f_min, f_max]` (Hz),
@@ -134,7 +132,6 @@ fn tick_label(v: f64, span: f64) -> String {
 
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
-    crate::fonts::register();
     let mut level_lines: Vec<Vec<TracedBranch>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {
@@ -167,200 +164,83 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
         .unwrap_or(0);
     let marker_step = n_points.div_ceil(MAX_MARKERS).max(1);
     let y_top = a_max * 1.08 * scale;
-    let backbone = backbone_runs(p, a_max * 1.08);
-
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (left, right) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
-        let x_span = p.f_max - p.f_min;
-        let x_fmt = |v: &f64| tick_label(*v, x_span);
-        let y_fmt = |v: &f64| tick_label(*v, y_top);
-        let mut chart = ChartBuilder::on(&left)
-            .caption(&p.title, ("sans-serif", 18))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(78)
-            .build_cartesian_2d(p.f_min..p.f_max, 0.0..y_top)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("Frequency f [Hz]")
-            .y_desc(format!("Amplitude a [{unit}], zero-to-peak"))
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .bold_line_style(MESH.0)
-            .light_line_style(MESH.1)
-            .draw()
-            .map_err(plot_err)?;
-
-        for run in &backbone {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    run.iter().map(|&(f, a)| (f, a * scale)),
-                    2,
-                    4,
-                    GREY.stroke_width(2),
-                ))
-                .map_err(plot_err)?;
+    let mut panel = Panel::new(
+        "",
+        "Frequency f [Hz]",
+        &format!("Amplitude a [{unit}], zero-to-peak"),
+    );
+    panel.x_range = Some((p.f_min, p.f_max));
+    panel.y_range = Some((0.0, y_top));
+    panel.legend = Corner::Outside;
+    panel.tick_format = tick_label;
+    let scaled = |pts: &[(f64, f64)]| pts.iter().map(|&(f, a)| (f, a * scale)).collect();
+    let mut backbone = Some("backbone");
+    for run in backbone_runs(p, a_max * 1.08) {
+        let mut s = Series::new(scaled(&run), GREY, BACKBONE);
+        if let Some(l) = backbone.take() {
+            s = s.label(l);
         }
-        for (i, (l, lines)) in p.levels.iter().zip(&level_lines).enumerate() {
-            let c = colour(i);
-            for pl in lines {
-                let pts = pl.points.iter().map(|&(f, a)| (f, a * scale));
-                if pl.stable {
-                    chart
-                        .draw_series(LineSeries::new(pts, c.stroke_width(2)))
-                        .map_err(plot_err)?;
-                } else {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts, 7, 5, c.stroke_width(2)))
-                        .map_err(plot_err)?;
-                }
-            }
-            chart
-                .draw_series(l.sweep.points.iter().step_by(marker_step).map(|pt| {
-                    Circle::new(
-                        (pt.omega / (2.0 * PI), pt.amplitude * scale),
-                        2,
-                        c.stroke_width(1),
-                    )
-                }))
-                .map_err(plot_err)?;
+        panel.series.push(s);
+    }
+    for (i, (l, lines)) in p.levels.iter().zip(&level_lines).enumerate() {
+        let c = colour(i);
+        let stuck = l.sweep.points.iter().filter(|pt| pt.sticking).count();
+        let note = if stuck == 0 {
+            ""
+        } else if stuck == l.sweep.points.len() {
+            "  (no motion)"
+        } else {
+            "  (no motion in part)"
+        };
+        panel
+            .series
+            .push(Series::new(vec![], c, Style::Line(3)).label(format!("γ = {}{note}", l.gamma)));
+        for pl in lines {
+            let style = if pl.stable { Style::Line(2) } else { UNSTABLE };
+            panel.series.push(Series::new(scaled(&pl.points), c, style));
         }
-        // Jump arrows, drawn in pixels so the heads keep their shape.
-        for (i, l) in p.levels.iter().enumerate() {
-            let c = colour(i);
-            for j in &l.sweep.jumps {
+        let marks = l
+            .sweep
+            .points
+            .iter()
+            .step_by(marker_step)
+            .map(|pt| (pt.omega / (2.0 * PI), pt.amplitude * scale))
+            .collect();
+        panel.series.push(Series::new(marks, c, Style::Dots(2)));
+        let jumps = l
+            .sweep
+            .jumps
+            .iter()
+            .flat_map(|j| {
                 let f = j.omega / (2.0 * PI);
-                let from = chart.backend_coord(&(f, j.amplitude_before * scale));
-                let to = chart.backend_coord(&(f, j.amplitude_after * scale));
-                draw_arrow(&root, from, to, c)?;
-            }
-        }
-
-        // Legend panel.
-        let text = |s: &str, x: i32, y: i32, size: u32| -> Result<(), CliError> {
-            right
-                .draw(&Text::new(
-                    s.to_string(),
-                    (x, y),
-                    ("sans-serif", size).into_font().color(&BLACK),
-                ))
-                .map_err(plot_err)
-        };
-        let mut y = 40;
-        text("Input level γ", 12, y, 15)?;
-        y += 8;
-        text("(m/s², zero-to-peak)", 12, y + 12, 12)?;
-        y += 34;
-        // Rows shrink when there are many levels, so the legend fits.
-        let n_levels = p.levels.len().max(1) as i32;
-        let row = ((HEIGHT as i32 - y - 190) / n_levels).clamp(9, 22);
-        let font = (row - 6).clamp(7, 14) as u32;
-        for (i, l) in p.levels.iter().enumerate() {
-            let c = colour(i);
-            right
-                .draw(&PathElement::new(vec![(14, y), (44, y)], c.stroke_width(3)))
-                .map_err(plot_err)?;
-            let stuck = l.sweep.points.iter().filter(|pt| pt.sticking).count();
-            let note = if stuck == 0 {
-                ""
-            } else if stuck == l.sweep.points.len() {
-                "  (no motion)"
-            } else {
-                "  (no motion in part)"
-            };
-            text(
-                &format!("γ = {}{note}", l.gamma),
-                54,
-                y - font as i32 / 2 - 1,
-                font,
-            )?;
-            y += row;
-        }
-        y += 14;
-        right
-            .draw(&PathElement::new(
-                vec![(14, y), (44, y)],
-                BLACK.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        text("stable branch", 54, y - 8, 13)?;
-        y += 22;
-        right
-            .draw(&DashedPathElement::new(
-                vec![(14, y), (44, y)],
-                7,
-                5,
-                BLACK.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        text("unstable branch", 54, y - 8, 13)?;
-        y += 22;
-        right
-            .draw(&DashedPathElement::new(
-                vec![(14, y), (44, y)],
-                2,
-                4,
-                GREY.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        text("backbone", 54, y - 8, 13)?;
-        y += 22;
-        right
-            .draw(&Circle::new((29, y), 2, BLACK.stroke_width(1)))
-            .map_err(plot_err)?;
-        let dir = match p.direction {
-            SweepDirection::Up => "up",
-            SweepDirection::Down => "down",
-        };
-        text(&format!("swept points (sweep {dir})"), 54, y - 8, 13)?;
-        if marker_step > 1 {
-            y += 16;
-            text(
-                &format!("(1 of every {marker_step} of {n_points} points)"),
-                54,
-                y - 8,
-                12,
-            )?;
-        }
-        y += 30;
-        let (ox, oy) = right.get_base_pixel();
-        draw_arrow(&root, (ox + 29, oy + y - 12), (ox + 29, oy + y + 10), BLACK)?;
-        text("jump", 54, y - 8, 13)?;
-        root.present().map_err(plot_err)?;
+                [
+                    (f, j.amplitude_before * scale),
+                    (f, j.amplitude_after * scale),
+                ]
+            })
+            .collect();
+        panel.series.push(Series::new(jumps, c, Style::Arrow(2)));
     }
-    Ok(svg)
-}
-
-fn draw_arrow<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    from: (i32, i32),
-    to: (i32, i32),
-    c: RGBColor,
-) -> Result<(), CliError> {
-    let dy = to.1 - from.1;
-    let len = dy.abs();
-    let head = 9.min(len);
-    let dir = dy.signum();
-    let base = to.1 - dir * head;
-    root.draw(&PathElement::new(
-        vec![from, (to.0, base)],
-        c.stroke_width(2),
-    ))
-    .map_err(plot_err)?;
-    if head > 0 {
-        root.draw(&Polygon::new(
-            vec![(to.0 - 5, base), (to.0 + 5, base), to],
-            c.filled(),
-        ))
-        .map_err(plot_err)?;
+    let dir = match p.direction {
+        SweepDirection::Up => "up",
+        SweepDirection::Down => "down",
+    };
+    let swept = if marker_step > 1 {
+        format!("swept points (sweep {dir}; 1 of every {marker_step} of {n_points})")
+    } else {
+        format!("swept points (sweep {dir})")
+    };
+    for (style, label) in [
+        (Style::Line(2), "stable branch".to_string()),
+        (UNSTABLE, "unstable branch".to_string()),
+        (Style::Dots(2), swept),
+        (Style::Arrow(2), "jump".to_string()),
+    ] {
+        panel
+            .series
+            .push(Series::new(vec![], RGBColor(0, 0, 0), style).label(label));
     }
-    Ok(())
+    figure::render(&p.title, &[panel], 1, WIDTH, HEIGHT)
 }
 
 #[cfg(test)]

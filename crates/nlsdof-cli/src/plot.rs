@@ -132,6 +132,11 @@ fn tick_label(v: f64, span: f64) -> String {
 
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
+    figure::render(&p.title, &[frf_panel(p)?], 1, WIDTH, HEIGHT)
+}
+
+/// The figure's one panel: branches, swept points, jumps, backbone.
+fn frf_panel(p: &FrfPlot) -> Result<Panel, CliError> {
     let mut level_lines: Vec<Vec<TracedBranch>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {
@@ -240,7 +245,7 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
             .series
             .push(Series::new(vec![], RGBColor(0, 0, 0), style).label(label));
     }
-    figure::render(&p.title, &[panel], 1, WIDTH, HEIGHT)
+    Ok(panel)
 }
 
 #[cfg(test)]

@@ -59,13 +59,13 @@ pub const FS_RECORD: f64 = 64.0;
 /// Integration steps per recorded sample.
 pub const SUBSTEPS: usize = 4;
 /// Relative noise of the chirp test's input and output channels (of their RMS).
-pub const CHIRP_NOISE: f64 = 0.01;
+pub(crate) const CHIRP_NOISE: f64 = 0.01;
 /// Additive amplitude noise of the rig, m.
-pub const RIG_NOISE_ABS: f64 = 5e-6;
+pub(crate) const RIG_NOISE_ABS: f64 = 5e-6;
 /// Phase noise of the rig, degrees.
-pub const RIG_NOISE_PHASE_DEG: f64 = 0.2;
+pub(crate) const RIG_NOISE_PHASE_DEG: f64 = 0.2;
 /// Noise of the recorded stepped-sine displacement, fraction of its RMS.
-pub const TIME_NOISE: f64 = 0.005;
+pub(crate) const TIME_NOISE: f64 = 0.005;
 /// Levels whose spectrograms are drawn (0-based; the paper shows 1, 3, 5).
 pub const SPECTROGRAM_LEVELS: [usize; 3] = [0, 2, 4];
 

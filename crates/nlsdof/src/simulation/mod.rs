@@ -72,7 +72,7 @@
 //!
 //! The exponent kind of each term is resolved once and every loop is
 //! compiled per combination (integer exponents: multiplications only; real
-//! exponents: a table-driven power [`law`]). With real exponents the power
+//! exponents: a table-driven power `law`). With real exponents the power
 //! of the *velocity* sits on the critical dependency chain of every RK4
 //! stage, so the default loop (uniform input, two samples per step)
 //! evaluates the powers at the middle and end of the step after next at

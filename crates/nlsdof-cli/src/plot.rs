@@ -251,7 +251,7 @@ fn frf_panel(p: &FrfPlot) -> Result<Panel, CliError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nlsdof::{ForcedResponse, Model};
+    use nlsdof::Model;
 
     fn duffing() -> Model {
         Model::linear(1.0, 3947.84, 1.2566)
@@ -261,18 +261,13 @@ mod tests {
     }
 
     fn level(model: &Model, gamma: f64, f_min: f64, f_max: f64, steps: usize) -> LevelResponse {
-        let response = ForcedResponse::new(model, gamma, Formulation::HarmonicBalance).unwrap();
         let omegas: Vec<f64> = (0..steps)
             .map(|i| 2.0 * PI * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64))
             .collect();
-        let sweep = response.sweep(&omegas, SweepDirection::Up).unwrap();
-        let phase_quadrature = response.phase_quadrature().unwrap();
-        LevelResponse {
-            gamma,
-            response,
-            sweep,
-            phase_quadrature,
-        }
+        let hb = Formulation::HarmonicBalance;
+        nlsdof::level_responses(model, &[gamma], &omegas, SweepDirection::Up, hb)
+            .unwrap()
+            .remove(0)
     }
 
     #[test]

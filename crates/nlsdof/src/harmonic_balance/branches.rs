@@ -184,12 +184,14 @@ mod tests {
         f_max: f64,
         steps: usize,
     ) -> (ForcedResponse, Sweep) {
-        let response = ForcedResponse::new(model, gamma, Formulation::HarmonicBalance).unwrap();
         let omegas: Vec<f64> = (0..steps)
             .map(|i| 2.0 * PI * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64))
             .collect();
-        let sweep = response.sweep(&omegas, SweepDirection::Up).unwrap();
-        (response, sweep)
+        let hb = Formulation::HarmonicBalance;
+        let l = crate::level_responses(model, &[gamma], &omegas, SweepDirection::Up, hb)
+            .unwrap()
+            .remove(0);
+        (l.response, l.sweep)
     }
 
     #[test]

@@ -23,6 +23,8 @@ pub enum CliError {
     SignalProcessing(#[from] nlsdof::signal_processing::SignalError),
     #[error(transparent)]
     FrfFile(#[from] nlsdof_io::frf_file::FrfFileError),
+    #[error(transparent)]
+    Demo(#[from] nlsdof::demo::DemoError),
     /// A bad command-line value: what was given and what is allowed.
     #[error("{0}")]
     Usage(String),

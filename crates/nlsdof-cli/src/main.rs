@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod figure;
 mod fonts;
 mod plot;
 mod png;

@@ -15,19 +15,21 @@
 //! * the swept points as small circles and each jump as a vertical arrow;
 //! * the backbone (undamped free-vibration frequency vs amplitude) dotted grey.
 
-use crate::cmd::frf::Level;
 use crate::error::CliError;
-use nlsdof::{backbone, Fold, Formulation, NormalisedModel, SteadyState, SweepDirection};
-use plotters::element::DashedPathElement;
+use crate::figure::{self, colour, Corner, Panel, Series, Style, GREY};
+use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
+use nlsdof::{backbone, Formulation, LevelResponse, NormalisedModel, SweepDirection};
 use plotters::prelude::*;
-use std::collections::HashMap;
 use std::f64::consts::PI;
+
+/// Unstable branches and the backbone.
+const UNSTABLE: Style = Style::DashPattern(2, 7, 5);
+const BACKBONE: Style = Style::DashPattern(2, 2, 4);
 
 /// Frequencies sampled for the branches (plus the folds).
 const SAMPLES: usize = 600;
 const WIDTH: u32 = 1100;
 const HEIGHT: u32 = 640;
-const LEGEND_WIDTH: u32 = 250;
 /// Largest number of swept-point markers drawn per level.
 const MAX_MARKERS: usize = 100;
 
@@ -40,142 +42,27 @@ pub struct FrfPlot<'a> {
     /// Band, Hz.
     pub f_min: f64,
     pub f_max: f64,
-    pub levels: &'a [Level],
+    pub levels: &'a [LevelResponse],
 }
 
-/// Tableau-10 without its grey (grey is the backbone).
-const COLOURS: [RGBColor; 9] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(255, 127, 14),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
-const GREY: RGBColor = RGBColor(130, 130, 130);
-
-fn colour(i: usize) -> RGBColor {
-    COLOURS[i % COLOURS.len()]
-}
-
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("cannot draw the plot: {e}"))
-}
-
-/// A piece of one branch: points (Hz, m) with one stability.
-#[derive(Debug, Clone)]
-pub struct Polyline {
-    pub points: Vec<(f64, f64)>,
-    pub stable: bool,
-}
-
-type Segment = ((f64, f64), (f64, f64), bool);
-
-fn key(p: (f64, f64), stable: bool) -> (u64, u64, bool) {
-    (p.0.to_bits(), p.1.to_bits(), stable)
-}
-
-/// Joins segments (generated in increasing frequency) into polylines.
-fn merge(segments: Vec<Segment>) -> Vec<Polyline> {
-    let mut lines: Vec<Polyline> = Vec::new();
-    let mut open: HashMap<(u64, u64, bool), usize> = HashMap::new();
-    for (p0, p1, stable) in segments {
-        if let Some(idx) = open.remove(&key(p0, stable)) {
-            lines[idx].points.push(p1);
-            open.insert(key(p1, stable), idx);
-        } else {
-            lines.push(Polyline {
-                points: vec![p0, p1],
-                stable,
-            });
-            open.insert(key(p1, stable), lines.len() - 1);
-        }
-    }
-    lines
-}
-
-fn connect_rankwise(
-    fa: f64,
-    a: &[SteadyState],
-    fb: f64,
-    b: &[SteadyState],
-    out: &mut Vec<Segment>,
-) {
-    for (ra, rb) in a.iter().zip(b) {
-        out.push((
-            (fa, ra.amplitude),
-            (fb, rb.amplitude),
-            ra.stable && rb.stable,
-        ));
-    }
-}
-
-/// All steady-state branches of one level across `[f_min, f_max]` (Hz).
-pub fn branches(level: &Level, f_min: f64, f_max: f64) -> Result<Vec<Polyline>, CliError> {
-    let folds: Vec<Fold> = level.sweep.folds.clone();
-    let fold_hz: Vec<f64> = folds.iter().map(|f| f.omega / (2.0 * PI)).collect();
-    let tol = 1e-9 * (f_max - f_min);
-    let mut samples: Vec<(f64, Vec<SteadyState>)> = Vec::with_capacity(SAMPLES);
-    for i in 0..SAMPLES {
-        let f = f_min + (f_max - f_min) * i as f64 / (SAMPLES - 1) as f64;
-        // A sample exactly at a fold would hold a double root: skip it.
-        if fold_hz.iter().any(|&ff| (ff - f).abs() <= tol) {
-            continue;
-        }
-        let set = level.response.steady_states(2.0 * PI * f)?;
-        samples.push((f, set.roots));
-    }
-    let mut segments: Vec<Segment> = Vec::new();
-    for w in samples.windows(2) {
-        let (fa, ra) = (&w[0].0, &w[0].1);
-        let (fb, rb) = (&w[1].0, &w[1].1);
-        let inside: Vec<usize> = (0..folds.len())
-            .filter(|&k| fold_hz[k] > *fa && fold_hz[k] < *fb)
-            .collect();
-        match inside.len() {
-            0 if ra.len() == rb.len() => connect_rankwise(*fa, ra, *fb, rb, &mut segments),
-            1 if ra.len().abs_diff(rb.len()) == 2 => {
-                let fold = folds[inside[0]];
-                let fp = (fold_hz[inside[0]], fold.amplitude);
-                // The side holding the pair born/dying at the fold.
-                let pair_after = rb.len() > ra.len();
-                let (pair_side, other) = if pair_after { (rb, ra) } else { (ra, rb) };
-                let j = (0..pair_side.len() - 1)
-                    .min_by(|&x, &y| {
-                        let dx = (pair_side[x].amplitude - fold.amplitude).abs()
-                            + (pair_side[x + 1].amplitude - fold.amplitude).abs();
-                        let dy = (pair_side[y].amplitude - fold.amplitude).abs()
-                            + (pair_side[y + 1].amplitude - fold.amplitude).abs();
-                        dx.total_cmp(&dy)
-                    })
-                    .unwrap_or(0);
-                let rest: Vec<SteadyState> = pair_side
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != j && *k != j + 1)
-                    .map(|(_, r)| *r)
-                    .collect();
-                if pair_after {
-                    connect_rankwise(*fa, other, *fb, &rest, &mut segments);
-                    for r in &pair_side[j..=j + 1] {
-                        segments.push((fp, (*fb, r.amplitude), r.stable));
-                    }
-                } else {
-                    connect_rankwise(*fa, &rest, *fb, other, &mut segments);
-                    for r in &pair_side[j..=j + 1] {
-                        segments.push(((*fa, r.amplitude), fp, r.stable));
-                    }
-                }
-            }
-            // Root count changes without one identified fold (sticking
-            // boundary, two folds within one sample step): leave a gap.
-            _ => {}
-        }
-    }
-    Ok(merge(segments))
+/// All steady-state branches of one level across `[f_min, f_max]` (Hz),
+/// as (Hz, m) polylines.
+pub fn branches(
+    level: &LevelResponse,
+    f_min: f64,
+    f_max: f64,
+) -> Result<Vec<TracedBranch>, CliError> {
+    let opts = BranchOptions {
+        samples: SAMPLES,
+        radians_per_unit: 2.0 * PI,
+    };
+    Ok(trace_branches(
+        &level.response,
+        &level.sweep.folds,
+        f_min,
+        f_max,
+        &opts,
+    )?)
 }
 
 /// Backbone as runs of (Hz, m) inside the band, clipped at its edges.
@@ -245,8 +132,12 @@ fn tick_label(v: f64, span: f64) -> String {
 
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
-    crate::fonts::register();
-    let mut level_lines: Vec<Vec<Polyline>> = Vec::with_capacity(p.levels.len());
+    figure::render(&p.title, &[frf_panel(p)?], 1, WIDTH, HEIGHT)
+}
+
+/// The figure's one panel: branches, swept points, jumps, backbone.
+fn frf_panel(p: &FrfPlot) -> Result<Panel, CliError> {
+    let mut level_lines: Vec<Vec<TracedBranch>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {
         let lines = branches(l, p.f_min, p.f_max)?;
@@ -278,206 +169,89 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
         .unwrap_or(0);
     let marker_step = n_points.div_ceil(MAX_MARKERS).max(1);
     let y_top = a_max * 1.08 * scale;
-    let backbone = backbone_runs(p, a_max * 1.08);
-
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (left, right) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
-        let x_span = p.f_max - p.f_min;
-        let x_fmt = |v: &f64| tick_label(*v, x_span);
-        let y_fmt = |v: &f64| tick_label(*v, y_top);
-        let mut chart = ChartBuilder::on(&left)
-            .caption(&p.title, ("sans-serif", 18))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(78)
-            .build_cartesian_2d(p.f_min..p.f_max, 0.0..y_top)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc("Frequency f [Hz]")
-            .y_desc(format!("Amplitude a [{unit}], zero-to-peak"))
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .bold_line_style(RGBColor(220, 220, 220))
-            .light_line_style(RGBColor(242, 242, 242))
-            .draw()
-            .map_err(plot_err)?;
-
-        for run in &backbone {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    run.iter().map(|&(f, a)| (f, a * scale)),
-                    2,
-                    4,
-                    GREY.stroke_width(2),
-                ))
-                .map_err(plot_err)?;
+    let mut panel = Panel::new(
+        "",
+        "Frequency f [Hz]",
+        &format!("Amplitude a [{unit}], zero-to-peak"),
+    );
+    panel.x_range = Some((p.f_min, p.f_max));
+    panel.y_range = Some((0.0, y_top));
+    panel.legend = Corner::Outside;
+    panel.tick_format = tick_label;
+    let scaled = |pts: &[(f64, f64)]| pts.iter().map(|&(f, a)| (f, a * scale)).collect();
+    let mut backbone = Some("backbone");
+    for run in backbone_runs(p, a_max * 1.08) {
+        let mut s = Series::new(scaled(&run), GREY, BACKBONE);
+        if let Some(l) = backbone.take() {
+            s = s.label(l);
         }
-        for (i, (l, lines)) in p.levels.iter().zip(&level_lines).enumerate() {
-            let c = colour(i);
-            for pl in lines {
-                let pts = pl.points.iter().map(|&(f, a)| (f, a * scale));
-                if pl.stable {
-                    chart
-                        .draw_series(LineSeries::new(pts, c.stroke_width(2)))
-                        .map_err(plot_err)?;
-                } else {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts, 7, 5, c.stroke_width(2)))
-                        .map_err(plot_err)?;
-                }
-            }
-            chart
-                .draw_series(l.sweep.points.iter().step_by(marker_step).map(|pt| {
-                    Circle::new(
-                        (pt.omega / (2.0 * PI), pt.amplitude * scale),
-                        2,
-                        c.stroke_width(1),
-                    )
-                }))
-                .map_err(plot_err)?;
+        panel.series.push(s);
+    }
+    for (i, (l, lines)) in p.levels.iter().zip(&level_lines).enumerate() {
+        let c = colour(i);
+        let stuck = l.sweep.points.iter().filter(|pt| pt.sticking).count();
+        let note = if stuck == 0 {
+            ""
+        } else if stuck == l.sweep.points.len() {
+            "  (no motion)"
+        } else {
+            "  (no motion in part)"
+        };
+        panel
+            .series
+            .push(Series::new(vec![], c, Style::Line(3)).label(format!("γ = {}{note}", l.gamma)));
+        for pl in lines {
+            let style = if pl.stable { Style::Line(2) } else { UNSTABLE };
+            panel.series.push(Series::new(scaled(&pl.points), c, style));
         }
-        // Jump arrows, drawn in pixels so the heads keep their shape.
-        for (i, l) in p.levels.iter().enumerate() {
-            let c = colour(i);
-            for j in &l.sweep.jumps {
+        let marks = l
+            .sweep
+            .points
+            .iter()
+            .step_by(marker_step)
+            .map(|pt| (pt.omega / (2.0 * PI), pt.amplitude * scale))
+            .collect();
+        panel.series.push(Series::new(marks, c, Style::Dots(2)));
+        let jumps = l
+            .sweep
+            .jumps
+            .iter()
+            .flat_map(|j| {
                 let f = j.omega / (2.0 * PI);
-                let from = chart.backend_coord(&(f, j.amplitude_before * scale));
-                let to = chart.backend_coord(&(f, j.amplitude_after * scale));
-                draw_arrow(&root, from, to, c)?;
-            }
-        }
-
-        // Legend panel.
-        let text = |s: &str, x: i32, y: i32, size: u32| -> Result<(), CliError> {
-            right
-                .draw(&Text::new(
-                    s.to_string(),
-                    (x, y),
-                    ("sans-serif", size).into_font().color(&BLACK),
-                ))
-                .map_err(plot_err)
-        };
-        let mut y = 40;
-        text("Input level γ", 12, y, 15)?;
-        y += 8;
-        text("(m/s², zero-to-peak)", 12, y + 12, 12)?;
-        y += 34;
-        // Rows shrink when there are many levels, so the legend fits.
-        let n_levels = p.levels.len().max(1) as i32;
-        let row = ((HEIGHT as i32 - y - 190) / n_levels).clamp(9, 22);
-        let font = (row - 6).clamp(7, 14) as u32;
-        for (i, l) in p.levels.iter().enumerate() {
-            let c = colour(i);
-            right
-                .draw(&PathElement::new(vec![(14, y), (44, y)], c.stroke_width(3)))
-                .map_err(plot_err)?;
-            let stuck = l.sweep.points.iter().filter(|pt| pt.sticking).count();
-            let note = if stuck == 0 {
-                ""
-            } else if stuck == l.sweep.points.len() {
-                "  (no motion)"
-            } else {
-                "  (no motion in part)"
-            };
-            text(
-                &format!("γ = {}{note}", l.gamma),
-                54,
-                y - font as i32 / 2 - 1,
-                font,
-            )?;
-            y += row;
-        }
-        y += 14;
-        right
-            .draw(&PathElement::new(
-                vec![(14, y), (44, y)],
-                BLACK.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        text("stable branch", 54, y - 8, 13)?;
-        y += 22;
-        right
-            .draw(&DashedPathElement::new(
-                vec![(14, y), (44, y)],
-                7,
-                5,
-                BLACK.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        text("unstable branch", 54, y - 8, 13)?;
-        y += 22;
-        right
-            .draw(&DashedPathElement::new(
-                vec![(14, y), (44, y)],
-                2,
-                4,
-                GREY.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        text("backbone", 54, y - 8, 13)?;
-        y += 22;
-        right
-            .draw(&Circle::new((29, y), 2, BLACK.stroke_width(1)))
-            .map_err(plot_err)?;
-        let dir = match p.direction {
-            SweepDirection::Up => "up",
-            SweepDirection::Down => "down",
-        };
-        text(&format!("swept points (sweep {dir})"), 54, y - 8, 13)?;
-        if marker_step > 1 {
-            y += 16;
-            text(
-                &format!("(1 of every {marker_step} of {n_points} points)"),
-                54,
-                y - 8,
-                12,
-            )?;
-        }
-        y += 30;
-        let (ox, oy) = right.get_base_pixel();
-        draw_arrow(&root, (ox + 29, oy + y - 12), (ox + 29, oy + y + 10), BLACK)?;
-        text("jump", 54, y - 8, 13)?;
-        root.present().map_err(plot_err)?;
+                [
+                    (f, j.amplitude_before * scale),
+                    (f, j.amplitude_after * scale),
+                ]
+            })
+            .collect();
+        panel.series.push(Series::new(jumps, c, Style::Arrow(2)));
     }
-    Ok(svg)
-}
-
-fn draw_arrow<DB: DrawingBackend>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    from: (i32, i32),
-    to: (i32, i32),
-    c: RGBColor,
-) -> Result<(), CliError> {
-    let dy = to.1 - from.1;
-    let len = dy.abs();
-    let head = 9.min(len);
-    let dir = dy.signum();
-    let base = to.1 - dir * head;
-    root.draw(&PathElement::new(
-        vec![from, (to.0, base)],
-        c.stroke_width(2),
-    ))
-    .map_err(plot_err)?;
-    if head > 0 {
-        root.draw(&Polygon::new(
-            vec![(to.0 - 5, base), (to.0 + 5, base), to],
-            c.filled(),
-        ))
-        .map_err(plot_err)?;
+    let dir = match p.direction {
+        SweepDirection::Up => "up",
+        SweepDirection::Down => "down",
+    };
+    let swept = if marker_step > 1 {
+        format!("swept points (sweep {dir}; 1 of every {marker_step} of {n_points})")
+    } else {
+        format!("swept points (sweep {dir})")
+    };
+    for (style, label) in [
+        (Style::Line(2), "stable branch".to_string()),
+        (UNSTABLE, "unstable branch".to_string()),
+        (Style::Dots(2), swept),
+        (Style::Arrow(2), "jump".to_string()),
+    ] {
+        panel
+            .series
+            .push(Series::new(vec![], RGBColor(0, 0, 0), style).label(label));
     }
-    Ok(())
+    Ok(panel)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nlsdof::{ForcedResponse, Model};
+    use nlsdof::Model;
 
     fn duffing() -> Model {
         Model::linear(1.0, 3947.84, 1.2566)
@@ -486,49 +260,14 @@ mod tests {
             .unwrap()
     }
 
-    fn level(model: &Model, gamma: f64, f_min: f64, f_max: f64, steps: usize) -> Level {
-        let response = ForcedResponse::new(model, gamma, Formulation::HarmonicBalance).unwrap();
+    fn level(model: &Model, gamma: f64, f_min: f64, f_max: f64, steps: usize) -> LevelResponse {
         let omegas: Vec<f64> = (0..steps)
             .map(|i| 2.0 * PI * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64))
             .collect();
-        let sweep = response.sweep(&omegas, SweepDirection::Up).unwrap();
-        let phase_quadrature = response.phase_quadrature().unwrap();
-        Level {
-            gamma,
-            response,
-            sweep,
-            phase_quadrature,
-        }
-    }
-
-    #[test]
-    fn branches_of_a_hardening_duffing_meet_at_the_folds() {
-        let l = level(&duffing(), 2.0, 8.0, 16.0, 50);
-        assert_eq!(l.sweep.folds.len(), 2);
-        let lines = branches(&l, 8.0, 16.0).unwrap();
-        // resonant branch 8 Hz -> upper fold, low branch lower fold -> 16 Hz,
-        // and the unstable middle branch from fold to fold
-        assert_eq!(lines.iter().filter(|p| p.stable).count(), 2, "{lines:?}");
-        assert_eq!(lines.iter().filter(|p| !p.stable).count(), 1);
-        for fold in &l.sweep.folds {
-            let fp = (fold.omega / (2.0 * PI), fold.amplitude);
-            let touching: Vec<&Polyline> = lines
-                .iter()
-                .filter(|p| p.points.first() == Some(&fp) || p.points.last() == Some(&fp))
-                .collect();
-            assert_eq!(touching.len(), 2, "fold {fp:?}");
-            assert!(touching.iter().any(|p| p.stable) && touching.iter().any(|p| !p.stable));
-        }
-        for p in &lines {
-            assert!(
-                p.points.windows(2).all(|w| w[1].0 > w[0].0),
-                "increasing frequency"
-            );
-            assert!(p
-                .points
-                .iter()
-                .all(|&(f, a)| (8.0..=16.0).contains(&f) && a > 0.0));
-        }
+        let hb = Formulation::HarmonicBalance;
+        nlsdof::level_responses(model, &[gamma], &omegas, SweepDirection::Up, hb)
+            .unwrap()
+            .remove(0)
     }
 
     #[test]

@@ -32,6 +32,7 @@
 //! columns frequency (Hz), amplitude and phase (deg) of run 1 and run 2.
 
 use crate::atomic::AtomicFile;
+use crate::csv_table::{CsvOptions, CsvRows};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -60,6 +61,43 @@ pub enum FrfFileError {
     },
     #[error("{path}: {message}")]
     Content { path: PathBuf, message: String },
+    /// A MAT channel (read as a signal).
+    #[error(transparent)]
+    Signal(#[from] crate::signal_file::SignalFileError),
+}
+
+/// One channel of a time history and its sampling frequency, Hz: a MAT
+/// variable (by name; a number picks the file's only array) or a channel
+/// of a CSV or Polytec time history ([`read_time_history`],
+/// [`TimeHistory::channel`]: by name or 1-based number). `fs` is the
+/// sampling frequency of a file without a time column.
+pub fn read_channel(
+    path: &Path,
+    key: &str,
+    fs: Option<f64>,
+) -> Result<(f64, Vec<f64>), FrfFileError> {
+    let is_mat = path
+        .extension()
+        .map(|e| e.eq_ignore_ascii_case("mat"))
+        .unwrap_or(false);
+    if is_mat {
+        let var = if key.parse::<usize>().is_ok() {
+            None
+        } else {
+            Some(key)
+        };
+        let s = crate::signal_file::read_signal(path, fs, var)?;
+        return match s.grid {
+            crate::signal_file::SignalGrid::Uniform { fs, .. } => Ok((fs, s.values)),
+            crate::signal_file::SignalGrid::Times(_) => Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!("sampling of {key:?} is not uniform"),
+            }),
+        };
+    }
+    let th = read_time_history(path, fs)?;
+    let v = th.channel(key, path)?.to_vec();
+    Ok((th.fs, v))
 }
 
 /// An FRF table read from CSV.
@@ -104,24 +142,23 @@ pub fn read_frf_csv(path: &Path) -> Result<FrfTable, FrfFileError> {
 
 /// Parses an FRF table from CSV text (`path` only names it in errors).
 pub fn parse_frf_csv(text: &str, path: &Path) -> Result<FrfTable, FrfFileError> {
-    let text = crate::strip_bom(text);
+    let mut csv = CsvRows::new(text.as_bytes(), CsvOptions::default());
     let mut header: Option<Vec<String>> = None;
     let mut rows: Vec<(usize, Vec<f64>)> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = raw.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = line.split(',').map(|s| s.trim()).collect();
+    while let Some((line, fields)) = csv.next_row().map_err(|e| FrfFileError::Read {
+        path: path.into(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    })? {
+        let line = line as usize;
         if header.is_none() && rows.is_empty() && fields.iter().any(|f| f.parse::<f64>().is_err()) {
             header = Some(fields.iter().map(|f| f.to_ascii_lowercase()).collect());
             continue;
         }
         let vals = fields
             .iter()
-            .map(|f| parse_num(path, i + 1, f))
+            .map(|f| parse_num(path, line, f))
             .collect::<Result<Vec<_>, _>>()?;
-        rows.push((i + 1, vals));
+        rows.push((line, vals));
     }
     if rows.is_empty() {
         return Err(FrfFileError::Empty { path: path.into() });

@@ -3,6 +3,9 @@
 //! * [`model_file`] — the model TOML (`mass`, `stiffness`, `damping`,
 //!   optional `[nonlinear_stiffness]` / `[nonlinear_damping]` tables with
 //!   `coefficient` and `exponent`).
+//! * [`csv_table`] — the CSV reader of the table formats (csv crate,
+//!   header-indexed, BOM tolerant, optional decimal comma): stepped-sine
+//!   and phase-resonance data, FRF tables, named signal columns.
 //! * [`atomic`] — write-to-temporary-then-rename output files so a failure or
 //!   Ctrl-C never leaves a partial file behind.
 //! * [`signal_file`] — recorded input signals (CSV `t,accel` or one column
@@ -15,6 +18,7 @@
 
 pub mod atomic;
 pub mod bounds_file;
+pub mod csv_table;
 pub mod error;
 pub mod frf_file;
 pub mod mat5;

@@ -12,6 +12,7 @@
 //! zero-to-peak unless [`ReadOptions::peak_to_peak`] halves both — the same
 //! options as the sweep reader ([`crate::stepped_sine_data`]).
 
+use crate::csv_table::{column, lowercase, CsvOptions, CsvReadError, CsvRows, Row};
 use crate::stepped_sine_data::{AmplitudeKind, ReadOptions, STANDARD_GRAVITY};
 use nlsdof::identification::phase_resonance::{PrDataError, PrDataset, PrPoint};
 use std::path::{Path, PathBuf};
@@ -46,22 +47,19 @@ pub fn parse_csv(
     path: &Path,
     opts: &ReadOptions,
 ) -> Result<PrDataset, PhaseResonanceDataError> {
-    let text = crate::strip_bom(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let Some((_, header)) = lines.next() else {
+    let mut rows = CsvRows::new(text.as_bytes(), CsvOptions::default());
+    let read_err = |e: CsvReadError| PhaseResonanceDataError::Read {
+        path: path.into(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    };
+    let Some((_, header)) = rows.next_row().map_err(read_err)? else {
         return Err(PhaseResonanceDataError::Data {
             path: path.into(),
             source: PrDataError::Empty,
         });
     };
-    let cols: Vec<String> = header
-        .split(',')
-        .map(|c| c.trim().to_ascii_lowercase())
-        .collect();
-    let find = |name: &'static str| cols.iter().position(|c| c == name);
+    let cols = lowercase(header);
+    let find = |name: &'static str| column(&cols, name);
     let need = |name: &'static str| {
         find(name).ok_or(PhaseResonanceDataError::MissingColumn {
             path: path.into(),
@@ -77,32 +75,15 @@ pub fn parse_csv(
         1.0
     };
     let mut points = Vec::new();
-    for (i, line) in lines {
-        let lineno = i + 1;
+    while let Some((lineno, fields)) = rows.next_row().map_err(read_err)? {
         let err = |message: String| PhaseResonanceDataError::Line {
             path: path.into(),
-            line: lineno,
+            line: lineno as usize,
             message,
         };
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() > cols.len() {
-            return Err(err(format!(
-                "{} fields, but the header names {} columns",
-                fields.len(),
-                cols.len()
-            )));
-        }
-        let get = |c: usize, name: &str| {
-            fields
-                .get(c)
-                .copied()
-                .ok_or_else(|| err(format!("missing field '{name}'")))
-        };
-        let num = |c: usize, name: &str| -> Result<f64, PhaseResonanceDataError> {
-            let s = get(c, name)?;
-            s.parse::<f64>()
-                .map_err(|_| err(format!("{name} = '{s}' is not a number")))
-        };
+        let row = Row::new(fields, cols.len()).map_err(err)?;
+        let get = |c: usize, name: &str| row.field(c, name).map_err(err);
+        let num = |c: usize, name: &str| row.number(c, name).map_err(err);
         let f = num(cf, "f_hz")?;
         let omega = TWO_PI * f;
         let gamma = num(cg, "gamma")? * pp * g_unit;

@@ -23,6 +23,7 @@
 //! returned half-read.
 
 use crate::atomic::AtomicFile;
+use crate::csv_table::{column, CsvOptions, CsvReadError, CsvRows};
 use crate::error::IoError;
 use nlsdof::excitation::SampledInput;
 use nlsdof::simulation::SimulationError;
@@ -83,6 +84,9 @@ pub enum SignalFileError {
     },
     #[error("{path}: {message}")]
     MatContent { path: PathBuf, message: String },
+    /// A named CSV column that cannot be read ([`read_csv_column`]).
+    #[error("{path}: {message}")]
+    Column { path: PathBuf, message: String },
 }
 
 /// Sampling of a signal read from a file.
@@ -131,6 +135,117 @@ impl Signal {
 /// Relative tolerance (fraction of one step) for treating a time column as
 /// uniformly sampled.
 pub const UNIFORM_TOLERANCE: f64 = 1e-3;
+
+/// Reads the column named `name` (case-insensitive) of a CSV with a header
+/// line, and its time column (`t`, `time` or `t_s`) if it has one; without
+/// a time column `fs` (Hz, checked by the caller) gives the sampling,
+/// starting at t = 0. Every row has as many fields as the header; values
+/// are finite, times strictly increasing. A uniform time column (to within
+/// [`UNIFORM_TOLERANCE`] of a step) is stored as `(t0, fs)`.
+pub fn read_csv_column(
+    path: &Path,
+    name: &str,
+    fs: Option<f64>,
+) -> Result<Signal, SignalFileError> {
+    let err = |message: String| SignalFileError::Column {
+        path: path.into(),
+        message,
+    };
+    let file = std::fs::File::open(path).map_err(|source| SignalFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    let mut rows = CsvRows::new(file, CsvOptions::default());
+    let read_err = |e: CsvReadError| match e {
+        CsvReadError::Io(source) => SignalFileError::Read {
+            path: path.into(),
+            source,
+        },
+        e => SignalFileError::Read {
+            path: path.into(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+        },
+    };
+    let Some((_, header)) = rows.next_row().map_err(read_err)? else {
+        return Err(SignalFileError::Empty { path: path.into() });
+    };
+    let names: Vec<String> = header.iter().map(|f| f.to_ascii_lowercase()).collect();
+    if names.iter().all(|n| n.parse::<f64>().is_ok()) {
+        return Err(err(format!(
+            "--column {name} needs a header line naming the columns (the first line is numbers)"
+        )));
+    }
+    let col = column(&names, name).ok_or_else(|| {
+        err(format!(
+            "no column named {name:?} (columns: {})",
+            names.join(",")
+        ))
+    })?;
+    let tcol = names
+        .iter()
+        .position(|n| ["t", "time", "t_s"].contains(&n.as_str()))
+        .filter(|&i| i != col);
+    match (tcol, fs) {
+        (Some(_), Some(fs)) => {
+            return Err(SignalFileError::FsWithTimeColumn {
+                path: path.into(),
+                fs,
+            })
+        }
+        (None, None) => {
+            return Err(err(
+                "no time column (t) in the header: give the sampling frequency with --fs HZ".into(),
+            ))
+        }
+        _ => {}
+    }
+    let mut values = Vec::new();
+    let mut times = Vec::new();
+    let parse = |line: u64, field: &str, what: &str| -> Result<f64, SignalFileError> {
+        let v: f64 = field
+            .parse()
+            .map_err(|_| err(format!("line {line}: {what} {field:?} is not a number")))?;
+        if !v.is_finite() {
+            return Err(err(format!("line {line}: {what} {v} is not finite")));
+        }
+        Ok(v)
+    };
+    while let Some((line, fields)) = rows.next_row().map_err(read_err)? {
+        if fields.len() != names.len() {
+            return Err(err(format!(
+                "line {line}: expected {} columns like the header, found {}",
+                names.len(),
+                fields.len()
+            )));
+        }
+        values.push(parse(line, &fields[col], name)?);
+        if let Some(tc) = tcol {
+            let t = parse(line, &fields[tc], "time")?;
+            if let Some(&prev) = times.last() {
+                if t <= prev {
+                    return Err(err(format!(
+                        "line {line}: time {t} does not increase (previous {prev})"
+                    )));
+                }
+            }
+            times.push(t);
+        }
+    }
+    if values.is_empty() {
+        return Err(err("no samples after the header".into()));
+    }
+    let grid = match fs {
+        Some(fs) => SignalGrid::Uniform { t0: 0.0, fs },
+        None => match SampledInput::detect_uniform(&times, UNIFORM_TOLERANCE) {
+            Some((t0, fs)) => SignalGrid::Uniform { t0, fs },
+            None if times.len() < 2 => {
+                return Err(err("one sample cannot define a sampling frequency".into()))
+            }
+            None => SignalGrid::Times(times),
+        },
+    };
+    Ok(Signal { values, grid })
+}
 
 fn check_fs(path: &Path, fs: Option<f64>) -> Result<(), SignalFileError> {
     if let Some(fs) = fs {

@@ -15,6 +15,7 @@
 //!   phases are relative to the vibrometer's reference channel, not a lag
 //!   behind the base acceleration, so they are not used.
 
+use crate::csv_table::{column, lowercase, CsvOptions, CsvReadError, CsvRows, Row};
 use nlsdof::identification::{DataError, Dataset, Record};
 use nlsdof::SweepDirection;
 use std::path::{Path, PathBuf};
@@ -101,22 +102,19 @@ pub fn parse_csv(
     path: &Path,
     opts: &ReadOptions,
 ) -> Result<Dataset, SteppedSineDataError> {
-    let text = crate::strip_bom(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let Some((_, header)) = lines.next() else {
+    let mut rows = CsvRows::new(text.as_bytes(), CsvOptions::default());
+    let read_err = |e: CsvReadError| SteppedSineDataError::Read {
+        path: path.into(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    };
+    let Some((_, header)) = rows.next_row().map_err(read_err)? else {
         return Err(SteppedSineDataError::Data {
             path: path.into(),
             source: DataError::Empty,
         });
     };
-    let cols: Vec<String> = header
-        .split(',')
-        .map(|c| c.trim().to_ascii_lowercase())
-        .collect();
-    let find = |name: &'static str| cols.iter().position(|c| c == name);
+    let cols = lowercase(header);
+    let find = |name: &'static str| column(&cols, name);
     let need = |name: &'static str| {
         find(name).ok_or(SteppedSineDataError::MissingColumn {
             path: path.into(),
@@ -131,32 +129,15 @@ pub fn parse_csv(
     );
     let (cp, cs, cw) = (find("phase_deg"), find("sweep"), find("weight"));
     let mut recs = Vec::new();
-    for (i, line) in lines {
-        let lineno = i + 1;
+    while let Some((lineno, fields)) = rows.next_row().map_err(read_err)? {
         let err = |message: String| SteppedSineDataError::Line {
             path: path.into(),
-            line: lineno,
+            line: lineno as usize,
             message,
         };
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if fields.len() > cols.len() {
-            return Err(err(format!(
-                "{} fields, but the header names {} columns",
-                fields.len(),
-                cols.len()
-            )));
-        }
-        let get = |c: usize, name: &str| {
-            fields
-                .get(c)
-                .copied()
-                .ok_or_else(|| err(format!("missing field '{name}'")))
-        };
-        let num = |c: usize, name: &str| -> Result<f64, SteppedSineDataError> {
-            let s = get(c, name)?;
-            s.parse::<f64>()
-                .map_err(|_| err(format!("{name} = '{s}' is not a number")))
-        };
+        let row = Row::new(fields, cols.len()).map_err(err)?;
+        let get = |c: usize, name: &str| row.field(c, name).map_err(err);
+        let num = |c: usize, name: &str| row.number(c, name).map_err(err);
         let level = get(cl, "level")?.to_string();
         let f = num(cf, "f_hz")?;
         let omega = TWO_PI * f;

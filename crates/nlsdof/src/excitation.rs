@@ -26,7 +26,7 @@
 //! input is **piecewise linear** (linear interpolation); see
 //! [`crate::simulation`] for how each integrator uses the samples.
 
-use crate::simulation::SimulationError;
+use crate::error::SimulationError;
 use std::f64::consts::TAU;
 
 /// A continuous-time input acceleration.
@@ -202,6 +202,10 @@ pub enum Dwell {
 
 /// Phase-continuous stepped sine: frequency `omegas[k]` for the k-th dwell,
 /// `γ = A sin θ(t)`, `θ` continuous across steps.
+/// Largest number of frequency steps of one stepped sine (open loop here,
+/// closed loop in [`crate::stepped_sine`]).
+pub const MAX_STEPS: usize = 1_000_000;
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct SteppedSine {
     pub amplitude: f64,
@@ -219,7 +223,7 @@ impl SteppedSine {
         if omegas.is_empty() {
             return Err(SimulationError::EmptyInput);
         }
-        if omegas.len() > crate::stepped_sine::MAX_STEPS {
+        if omegas.len() > MAX_STEPS {
             return Err(SimulationError::InvalidOption {
                 name: "stepped-sine steps",
                 value: omegas.len() as f64,

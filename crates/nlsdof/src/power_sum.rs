@@ -102,7 +102,7 @@ impl PowerSum {
 
     /// Sign changes of the coefficient sequence: an upper bound on the
     /// number of positive roots (generalised Descartes rule).
-    pub fn sign_changes(&self) -> usize {
+    pub(crate) fn sign_changes(&self) -> usize {
         self.coefficients
             .windows(2)
             .filter(|w| (w[0] > 0.0) != (w[1] > 0.0))
@@ -110,7 +110,7 @@ impl PowerSum {
     }
 
     /// Sign of `f` as `x → 0⁺` (`t → −∞`) and as `x → ∞`.
-    pub fn asymptotic_signs(&self) -> (f64, f64) {
+    pub(crate) fn asymptotic_signs(&self) -> (f64, f64) {
         match (self.coefficients.first(), self.coefficients.last()) {
             (Some(a), Some(b)) => (a.signum(), b.signum()),
             _ => (0.0, 0.0),
@@ -119,7 +119,7 @@ impl PowerSum {
 
     /// `f(e^t) · e^{−M(t)}`, `M(t) = maxᵢ(ln|cᵢ| + eᵢt)`: same sign as `f`,
     /// magnitude in `[…, n]`, never overflows.
-    pub fn eval_scaled(&self, t: f64) -> f64 {
+    pub(crate) fn eval_scaled(&self, t: f64) -> f64 {
         let mut m = f64::NEG_INFINITY;
         for (l, e) in self.log_abs.iter().zip(&self.exponents) {
             m = m.max(l + e * t);
@@ -147,7 +147,7 @@ impl PowerSum {
 
     /// `d/dt [e^{−e₁ t} F(t)]` as a power sum in `x` (exponents shifted by
     /// `−e₁`): one term fewer, roots interlace those of `F` (Rolle).
-    pub fn reduced_derivative(&self) -> PowerSum {
+    pub(crate) fn reduced_derivative(&self) -> PowerSum {
         if self.exponents.is_empty() {
             return self.clone();
         }
@@ -163,7 +163,7 @@ impl PowerSum {
 
     /// An interval `[T_lo, T_hi]` of `t = ln x` that contains every root
     /// (`None` if there are fewer than two terms, i.e. no root at all).
-    pub fn root_bounds(&self) -> Option<(f64, f64)> {
+    pub(crate) fn root_bounds(&self) -> Option<(f64, f64)> {
         let n = self.len();
         if n < 2 {
             return None;
@@ -297,7 +297,7 @@ impl PowerSum {
 ///
 /// Inverse quadratic interpolation / secant with bisection safeguard
 /// (Brent 1973, *Algorithms for Minimization without Derivatives*, ch. 4).
-pub fn brent(f: &dyn Fn(f64) -> f64, a: f64, b: f64, fa: f64, fb: f64) -> f64 {
+pub(crate) fn brent(f: &dyn Fn(f64) -> f64, a: f64, b: f64, fa: f64, fb: f64) -> f64 {
     let (mut a, mut b, mut fa, mut fb) = (a, b, fa, fb);
     let mut c = a;
     let mut fc = fa;

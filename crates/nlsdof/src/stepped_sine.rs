@@ -44,7 +44,7 @@ use crate::harmonic_balance::SweepDirection;
 use crate::model::NormalisedModel;
 use crate::simulation::coulomb::{self, Mode};
 use crate::simulation::law::{dispatch, Dyn, Law, Visit};
-use crate::simulation::rk4::step;
+use crate::simulation::rk4_step::step;
 use crate::simulation::{check_model, Sample, SimulationError, State, Summary};
 use std::f64::consts::{PI, TAU};
 
@@ -52,7 +52,7 @@ use std::f64::consts::{PI, TAU};
 /// up front).
 pub const MAX_SAMPLES_PER_CYCLE: usize = 100_000;
 /// Largest number of frequency steps of one sweep.
-pub const MAX_STEPS: usize = 1_000_000;
+pub use crate::excitation::MAX_STEPS;
 
 /// Rig settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -280,8 +280,9 @@ pub fn run_with_progress(
     )
 }
 
-/// Runs several levels (in parallel, one thread per level up to the
-/// available cores), each from rest. Results in the order of `gammas`.
+/// Runs several levels (in parallel on the rayon pool), each from rest.
+/// Results in the order of `gammas`, identical whatever the number of
+/// threads; on failure, the error of the first failing level.
 pub fn run_levels(
     model: &NormalisedModel,
     gammas: &[f64],
@@ -290,42 +291,43 @@ pub fn run_levels(
     options: &RigOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<RigSweep>, SimulationError> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::Mutex;
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<RigSweep, SimulationError>>>> =
-        Mutex::new(vec![None; gammas.len()]);
-    let threads = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1)
-        .min(gammas.len())
-        .max(1);
-    std::thread::scope(|sc| {
-        for _ in 0..threads {
-            sc.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                if k >= gammas.len() {
-                    break;
-                }
-                let r = run_with_progress(
-                    model,
-                    gammas[k],
-                    omegas,
-                    direction,
-                    options,
-                    State::default(),
-                    progress,
-                );
-                results.lock().expect("no panics while holding the lock")[k] = Some(r);
-            });
-        }
-    });
-    results
-        .into_inner()
-        .expect("no panics while holding the lock")
-        .into_iter()
-        .map(|r| r.expect("every level ran"))
-        .collect()
+    run_sweeps(model, gammas, omegas, &[direction], options, progress)
+}
+
+/// The rig's whole test: every level swept in every direction, each sweep
+/// from rest, all sweeps in parallel on the rayon pool. Results in the
+/// order direction by direction, then level by level (`result[d *
+/// gammas.len() + k]` is level `k` swept in `directions[d]`), identical
+/// whatever the number of threads; on failure, the error of the first
+/// failing sweep in that order.
+pub fn run_sweeps(
+    model: &NormalisedModel,
+    gammas: &[f64],
+    omegas: &[f64],
+    directions: &[SweepDirection],
+    options: &RigOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<RigSweep>, SimulationError> {
+    use rayon::prelude::*;
+    let jobs: Vec<(SweepDirection, f64)> = directions
+        .iter()
+        .flat_map(|&d| gammas.iter().map(move |&g| (d, g)))
+        .collect();
+    let results: Vec<Result<RigSweep, SimulationError>> = jobs
+        .par_iter()
+        .map(|&(direction, gamma)| {
+            run_with_progress(
+                model,
+                gamma,
+                omegas,
+                direction,
+                options,
+                State::default(),
+                progress,
+            )
+        })
+        .collect();
+    results.into_iter().collect()
 }
 
 struct Rig<'a> {

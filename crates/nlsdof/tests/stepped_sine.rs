@@ -5,7 +5,7 @@
 
 use nlsdof::excitation::Excitation;
 use nlsdof::simulation::{simulate_excitation, Method, Options, State};
-use nlsdof::stepped_sine::{run, run_levels, RigOptions, RigSweep};
+use nlsdof::stepped_sine::{run, run_levels, run_sweeps, RigOptions, RigSweep};
 use nlsdof::{ForcedResponse, Formulation, Model, SweepDirection};
 use std::f64::consts::{PI, TAU};
 
@@ -281,4 +281,32 @@ fn strong_duffing_rig_jumps_at_the_fold_within_one_step() {
             );
         }
     }
+}
+
+/// The rig's parallel runs are bit-identical on 1 and 2 threads and equal
+/// to running each sweep alone, in the documented order.
+#[test]
+fn parallel_sweeps_are_identical_on_any_number_of_threads() {
+    let m = wing().normalised().unwrap();
+    let omegas: Vec<f64> = (0..12).map(|k| TAU * (5.3 + 0.02 * k as f64)).collect();
+    let gammas = [0.41, 0.81, 1.23];
+    let dirs = [SweepDirection::Up, SweepDirection::Down];
+    let opts = RigOptions::default();
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| run_sweeps(&m, &gammas, &omegas, &dirs, &opts, &|| {}).unwrap())
+    };
+    let (one, two) = (on(1), on(2));
+    assert_eq!(one, two);
+    for (d, &dir) in dirs.iter().enumerate() {
+        for (k, &g) in gammas.iter().enumerate() {
+            let alone = run(&m, g, &omegas, dir, &opts, Default::default()).unwrap();
+            assert_eq!(one[d * gammas.len() + k], alone);
+        }
+    }
+    let levels = run_levels(&m, &gammas, &omegas, SweepDirection::Down, &opts, &|| {}).unwrap();
+    assert_eq!(levels[..], one[gammas.len()..]);
 }

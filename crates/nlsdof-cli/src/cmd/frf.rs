@@ -3,11 +3,12 @@
 //! JSON or CSV, optionally plotted to SVG.
 
 use super::roots::{
-    check_frequency, check_gamma, conventions_help, load_model, model_summary, FormulationArg,
+    check_frequency, check_gamma, conventions_help, jumps_text, load_model, model_summary,
+    FormulationArg,
 };
 use crate::error::CliError;
 use crate::plot;
-use nlsdof::{ForcedResponse, NoMotion, PhaseQuadrature, Sweep, SweepDirection};
+use nlsdof::{level_responses, LevelResponse, NoMotion, SweepDirection};
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -150,14 +151,6 @@ fn linspace(f_min: f64, f_max: f64, steps: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Result of one input level.
-pub struct Level {
-    pub gamma: f64,
-    pub response: ForcedResponse,
-    pub sweep: Sweep,
-    pub phase_quadrature: Option<PhaseQuadrature>,
-}
-
 fn hz(omega: f64) -> f64 {
     omega / (2.0 * PI)
 }
@@ -199,21 +192,19 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 args.harmonics
             )));
         }
-        return super::frf_mhb::run(&args, &model, &gammas, &omegas, f_min, f_max);
+        let request = super::frf_mhb::Request {
+            model: &args.model,
+            sweep: args.sweep.to_core(),
+            steps: args.steps,
+            harmonics: args.harmonics,
+            json: args.json,
+            csv: args.csv,
+            plot: args.plot.as_deref(),
+        };
+        return super::frf_mhb::run(&request, &model, &gammas, &omegas, f_min, f_max);
     }
 
-    let mut levels = Vec::with_capacity(gammas.len());
-    for &gamma in &gammas {
-        let response = ForcedResponse::new(&model, gamma, formulation)?;
-        let sweep = response.sweep(&omegas, args.sweep.to_core())?;
-        let phase_quadrature = response.phase_quadrature()?;
-        levels.push(Level {
-            gamma,
-            response,
-            sweep,
-            phase_quadrature,
-        });
-    }
+    let levels = level_responses(&model, &gammas, &omegas, args.sweep.to_core(), formulation)?;
 
     let mut stdout_text = if args.json {
         json_output(&args, &model, &levels)
@@ -252,7 +243,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     Ok(())
 }
 
-fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
+fn json_output(args: &Args, model: &nlsdof::Model, levels: &[LevelResponse]) -> String {
     let lv: Vec<_> = levels
         .iter()
         .map(|l| {
@@ -321,7 +312,7 @@ fn json_output(args: &Args, model: &nlsdof::Model, levels: &[Level]) -> String {
 /// `sticking` flag each point. A sticking point (no steady motion) has
 /// amplitude 0 and an empty phase (there is no phase to report); a point
 /// without a finite steady state (undamped resonance) has both empty.
-fn csv_output(levels: &[Level]) -> String {
+fn csv_output(levels: &[LevelResponse]) -> String {
     let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking\n");
     for (i, l) in levels.iter().enumerate() {
         let sweep = match l.sweep.direction {
@@ -359,7 +350,7 @@ fn csv_output(levels: &[Level]) -> String {
 fn text_output(
     args: &Args,
     model: &nlsdof::Model,
-    levels: &[Level],
+    levels: &[LevelResponse],
     f_min: f64,
     f_max: f64,
 ) -> String {
@@ -484,26 +475,4 @@ fn text_output(
         }
     }
     s
-}
-
-/// The summary lines of a sweep's jumps (shared by the first-order and
-/// multi-harmonic `frf` text output).
-pub fn jumps_text(s: &mut String, jumps: &[nlsdof::Jump]) {
-    if jumps.is_empty() {
-        let _ = writeln!(s, "  jumps              none");
-    }
-    for j in jumps {
-        let _ = writeln!(
-            s,
-            "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
-            hz(j.omega),
-            j.amplitude_before,
-            j.amplitude_after,
-            if j.amplitude_after > j.amplitude_before {
-                "up"
-            } else {
-                "down"
-            }
-        );
-    }
 }

@@ -5,7 +5,7 @@
 use crate::error::CliError;
 use nlsdof::signal_processing::{spectral_ratio, welch_frf, Symmetry, WelchOptions, Window};
 use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum MethodArg {
@@ -101,32 +101,8 @@ EXAMPLES:
 
 Errors are one line on stderr, exit code 2; no output file is left behind.";
 
-fn read_channel(path: &Path, key: &str, fs: Option<f64>) -> Result<(f64, Vec<f64>), CliError> {
-    let is_mat = path
-        .extension()
-        .map(|e| e.eq_ignore_ascii_case("mat"))
-        .unwrap_or(false);
-    if is_mat {
-        let var = if key.parse::<usize>().is_ok() {
-            None
-        } else {
-            Some(key)
-        };
-        let s = nlsdof_io::signal_file::read_signal(path, fs, var)?;
-        return match s.grid {
-            nlsdof_io::signal_file::SignalGrid::Uniform { fs, .. } => Ok((fs, s.values)),
-            nlsdof_io::signal_file::SignalGrid::Times(_) => Err(CliError::Usage(format!(
-                "{}: sampling of {key:?} is not uniform",
-                path.display()
-            ))),
-        };
-    }
-    let th = nlsdof_io::frf_file::read_time_history(path, fs)?;
-    let v = th.channel(key, path)?.to_vec();
-    Ok((th.fs, v))
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
+    use nlsdof_io::frf_file::read_channel;
     let (fs_in, x) = read_channel(&args.input, &args.input_channel, args.fs)?;
     let out_path = args
         .output_file

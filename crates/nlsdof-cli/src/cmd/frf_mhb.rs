@@ -4,16 +4,14 @@
 //! ([`nlsdof::multi_harmonic`]). Output formats extend those of `frf`:
 //! every point carries its harmonics and `max_abs_x`.
 
-use super::frf::Args;
+use super::roots::jumps_text;
 use crate::error::CliError;
-use nlsdof::multi_harmonic::sweep::{sweep, MhbSweep};
+use crate::figure::{self, colour, Corner, Panel, Series, Style};
 use nlsdof::multi_harmonic::{
-    harmonic_amplitude, harmonic_phase, max_abs_displacement, regularisation_check,
-    ContinuationOptions, HbSystem, Settings, MAX_HARMONICS,
+    harmonic_amplitude, harmonic_phase, level_sweeps, max_abs_displacement, LevelSweep,
+    MAX_HARMONICS,
 };
 use nlsdof::{Model, SweepDirection};
-use plotters::element::DashedPathElement;
-use plotters::prelude::*;
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -42,6 +40,25 @@ pub fn check_damped(model: &Model, flag: &str) -> Result<(), CliError> {
     Ok(())
 }
 
+/// What `frf --harmonics H` was asked for (the parsed `frf` arguments).
+pub struct Request<'a> {
+    /// The model file, as named.
+    pub model: &'a std::path::Path,
+    pub sweep: SweepDirection,
+    pub steps: usize,
+    pub harmonics: usize,
+    pub json: bool,
+    pub csv: bool,
+    pub plot: Option<&'a std::path::Path>,
+}
+
+fn sweep_name(d: SweepDirection) -> &'static str {
+    match d {
+        SweepDirection::Up => "up",
+        SweepDirection::Down => "down",
+    }
+}
+
 /// Checks `--harmonics`.
 pub fn check_harmonics(h: usize) -> Result<usize, CliError> {
     if h == 0 || h > CLI_MAX_HARMONICS {
@@ -54,77 +71,6 @@ pub fn check_harmonics(h: usize) -> Result<usize, CliError> {
 
 fn hz(omega: f64) -> f64 {
     omega / (2.0 * PI)
-}
-
-/// One level.
-pub struct MhbLevel {
-    pub gamma: f64,
-    pub sweep: MhbSweep,
-    /// Regularised models only: the regularisation check (ε → ε/4) at the
-    /// swept point of largest first-harmonic amplitude: (f Hz, relative change).
-    pub regularisation: Option<(f64, f64)>,
-}
-
-/// Computes the levels (in memory, nothing written).
-pub fn compute(
-    model: &Model,
-    gammas: &[f64],
-    omegas: &[f64],
-    direction: SweepDirection,
-    h: usize,
-) -> Result<Vec<MhbLevel>, CliError> {
-    let n = model.normalised()?;
-    let mut out = Vec::with_capacity(gammas.len());
-    for &gamma in gammas {
-        let s = sweep(
-            &n,
-            gamma,
-            h,
-            omegas,
-            direction,
-            settings_for(model),
-            &ContinuationOptions::default(),
-        )?;
-        let mut regularisation = None;
-        let mut sys = HbSystem::new(&n, gamma, h, settings_for(model))?;
-        if sys.is_regularised() {
-            if let Some(p) = s.points.iter().max_by(|a, b| {
-                harmonic_amplitude(&a.coefficients, 1)
-                    .total_cmp(&harmonic_amplitude(&b.coefficients, 1))
-            }) {
-                sys.set_samples(s.samples)?;
-                let chk = regularisation_check(&sys, p.omega, &p.coefficients)?;
-                regularisation = Some((hz(p.omega), chk.relative_change));
-            }
-        }
-        out.push(MhbLevel {
-            gamma,
-            sweep: s,
-            regularisation,
-        });
-    }
-    Ok(out)
-}
-
-/// Numerical settings for a model: the defaults, except that a model with a
-/// negative exponent (regularised, e.g. Coulomb friction) uses an aliasing
-/// tolerance of 1e-6 (relative to γ): the truncation error of HB for a
-/// friction jump decays only like 1/H (measured 7e-4 at H = 25, see
-/// docs/multi-harmonic.md) and dominates anyway, while resolving the fixed
-/// regularisation layer to 1e-11 near resonance (velocity ≫ ε) would need
-/// more than the 2^18 samples allowed. For the same reason the
-/// regularisation width is ε_rel = 1e-2 (library default 1e-3): the layer
-/// is resolved with ~10 times fewer samples (a Coulomb sweep through
-/// resonance: 41 s → see docs/multi-harmonic.md).
-pub fn settings_for(model: &Model) -> Settings {
-    let negative = model.nonlinear_stiffness.is_some_and(|t| t.exponent < 0.0)
-        || model.nonlinear_damping.is_some_and(|t| t.exponent < 0.0);
-    let mut s = Settings::default();
-    if negative {
-        s.aliasing_tol = 1e-6;
-        s.regularisation = 1e-2;
-    }
-    s
 }
 
 fn harmonics_json(q: &[f64]) -> Vec<serde_json::Value> {
@@ -152,7 +98,7 @@ fn distortion(q: &[f64]) -> f64 {
 }
 
 pub fn run(
-    args: &Args,
+    args: &Request,
     model: &Model,
     gammas: &[f64],
     omegas: &[f64],
@@ -161,7 +107,7 @@ pub fn run(
 ) -> Result<(), CliError> {
     let h = args.harmonics;
     check_damped(model, "--harmonics")?;
-    let levels = compute(model, gammas, omegas, args.sweep.to_core(), h)?;
+    let levels = level_sweeps(model, gammas, omegas, args.sweep, h)?;
     for (i, l) in levels.iter().enumerate() {
         if let Some(w) = &l.sweep.warning {
             eprintln!(
@@ -179,14 +125,14 @@ pub fn run(
     } else {
         text_output(args, model, &levels, f_min, f_max)
     };
-    if let Some(path) = &args.plot {
+    if let Some(path) = args.plot {
         let title = format!(
             "{} - harmonic balance, H = {h}, sweep {}",
             args.model
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default(),
-            args.sweep.name()
+            sweep_name(args.sweep)
         );
         let svg = render(&title, &levels, f_min, f_max)?;
         nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;
@@ -198,7 +144,7 @@ pub fn run(
     Ok(())
 }
 
-fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
+fn json_output(args: &Request, model: &Model, levels: &[LevelSweep]) -> String {
     let lv: Vec<_> = levels
         .iter()
         .map(|l| {
@@ -233,13 +179,13 @@ fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
                 .collect();
             json!({
                 "gamma": l.gamma,
-                "sweep": args.sweep.name(),
+                "sweep": sweep_name(args.sweep),
                 "points": points,
                 "jumps": jumps,
                 "folds_hz": l.sweep.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
                 "fold_amplitudes": l.sweep.folds.iter().map(|f| f.1).collect::<Vec<_>>(),
                 "samples_per_period": l.sweep.samples,
-                "regularisation_check": l.regularisation.map(|(f, c)| json!({"f_hz": f, "relative_change_eps_over_4": c})),
+                "regularisation_check": l.regularisation.map(|(w, c)| json!({"f_hz": hz(w), "relative_change_eps_over_4": c})),
                 "warning": l.sweep.warning.as_ref().map(|w| w.to_string()),
             })
         })
@@ -256,7 +202,7 @@ fn json_output(args: &Args, model: &Model, levels: &[MhbLevel]) -> String {
     format!("{out}\n")
 }
 
-fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
+fn csv_output(args: &Request, levels: &[LevelSweep]) -> String {
     let h = args.harmonics;
     let mut s =
         String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking,max_abs_x");
@@ -275,7 +221,7 @@ fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
                 hz(p.omega),
                 harmonic_amplitude(q, 1),
                 harmonic_phase(q, 1).to_degrees(),
-                args.sweep.name(),
+                sweep_name(args.sweep),
                 p.stable,
                 max_abs_displacement(q)
             );
@@ -288,7 +234,13 @@ fn csv_output(args: &Args, levels: &[MhbLevel]) -> String {
     s
 }
 
-fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_max: f64) -> String {
+fn text_output(
+    args: &Request,
+    model: &Model,
+    levels: &[LevelSweep],
+    f_min: f64,
+    f_max: f64,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -299,7 +251,7 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
     let _ = writeln!(
         s,
         "stepped-sine sweep {}, {} .. {} Hz, {} steps; harmonic balance with H = {} harmonics (constant and even terms included), pseudo-arclength continuation, Hill stability",
-        args.sweep.name(),
+        sweep_name(args.sweep),
         f_min,
         f_max,
         args.steps,
@@ -359,7 +311,7 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
                 "  no stable state    at {unstable} steps (followed state unstable)"
             );
         }
-        super::frf::jumps_text(&mut s, &l.sweep.jumps);
+        jumps_text(&mut s, &l.sweep.jumps);
         if l.sweep.folds.is_empty() {
             let _ = writeln!(s, "  folds              none on the branch");
         }
@@ -371,7 +323,8 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
                 f.1
             );
         }
-        if let Some((f, c)) = l.regularisation {
+        if let Some((w, c)) = l.regularisation {
+            let f = hz(w);
             let _ = writeln!(
                 s,
                 "  regularisation     friction/negative exponent smoothed; at the peak ({f:.6} Hz) eps -> eps/4 changes A_1 by {c:.2e} (relative)"
@@ -384,24 +337,10 @@ fn text_output(args: &Args, model: &Model, levels: &[MhbLevel], f_min: f64, f_ma
     s
 }
 
-const COLOURS: [RGBColor; 6] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-];
-
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("plot failed: {e}"))
-}
-
 /// Two panels: first-harmonic amplitude (branch line, swept markers,
 /// dashed max|x|) and the harmonic content `A_k / A₁` (log scale) of the
 /// swept points.
-fn render(title: &str, levels: &[MhbLevel], f_min: f64, f_max: f64) -> Result<String, CliError> {
-    crate::fonts::register();
+fn render(title: &str, levels: &[LevelSweep], f_min: f64, f_max: f64) -> Result<String, CliError> {
     let mut a_max: f64 = 0.0;
     for l in levels {
         for p in &l.sweep.branch {
@@ -419,141 +358,95 @@ fn render(title: &str, levels: &[MhbLevel], f_min: f64, f_max: f64) -> Result<St
     } else {
         ("mm", 1e3)
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (1100, 900)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (top, bottom) = root.split_vertically(520);
-        let mut c1 = ChartBuilder::on(&top)
-            .caption(title, ("sans-serif", 18))
-            .margin(14)
-            .x_label_area_size(40)
-            .y_label_area_size(78)
-            .build_cartesian_2d(f_min..f_max, 0.0..a_max * 1.08 * scale)
-            .map_err(plot_err)?;
-        c1.configure_mesh()
-            .x_desc("Frequency f [Hz]")
-            .y_desc(format!("First harmonic A1 [{unit}]; dashed: max|x|"))
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .draw()
-            .map_err(plot_err)?;
-        for (i, l) in levels.iter().enumerate() {
-            let c = COLOURS[i % COLOURS.len()];
-            c1.draw_series(LineSeries::new(
-                l.sweep
-                    .branch
-                    .iter()
-                    .filter(|p| hz(p.omega) >= f_min && hz(p.omega) <= f_max)
-                    .map(|p| (hz(p.omega), p.amplitude(1) * scale)),
-                c.stroke_width(2),
-            ))
-            .map_err(plot_err)?
-            .label(format!("γ = {}", l.gamma))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
-            c1.draw_series(DashedLineSeries::new(
-                l.sweep
-                    .points
-                    .iter()
-                    .map(|p| (hz(p.omega), max_abs_displacement(&p.coefficients) * scale)),
-                5,
-                4,
-                c.stroke_width(1),
-            ))
-            .map_err(plot_err)?;
-            let step = l.sweep.points.len().div_ceil(100).max(1);
-            c1.draw_series(l.sweep.points.iter().step_by(step).map(|p| {
-                let pt = (hz(p.omega), harmonic_amplitude(&p.coefficients, 1) * scale);
-                if p.stable {
-                    Circle::new(pt, 2, c.filled())
-                } else {
-                    Circle::new(pt, 3, c.stroke_width(1))
-                }
-            }))
-            .map_err(plot_err)?;
-        }
-        c1.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_err)?;
-
-        // harmonic content, log10(A_k / A_1)
-        let h = levels
-            .first()
-            .and_then(|l| l.sweep.points.first())
-            .map(|p| (p.coefficients.len() - 1) / 2)
-            .unwrap_or(1);
-        let mut lo: f64 = -1.0;
-        let mut series: Vec<(usize, usize, Vec<(f64, f64)>)> = Vec::new();
-        for (i, l) in levels.iter().enumerate() {
-            for k in (0..=h).filter(|&k| k != 1).take(6) {
-                let pts: Vec<(f64, f64)> = l
-                    .sweep
-                    .points
-                    .iter()
-                    .filter_map(|p| {
-                        let r = harmonic_amplitude(&p.coefficients, k)
-                            / harmonic_amplitude(&p.coefficients, 1);
-                        (r > 1e-12).then(|| (hz(p.omega), r.log10()))
-                    })
-                    .collect();
-                for &(_, v) in &pts {
-                    lo = lo.min(v);
-                }
-                if !pts.is_empty() {
-                    series.push((i, k, pts));
-                }
-            }
-        }
-        let lo = lo.floor().max(-12.0);
-        let mut c2 = ChartBuilder::on(&bottom)
-            .margin(14)
-            .x_label_area_size(40)
-            .y_label_area_size(78)
-            .build_cartesian_2d(f_min..f_max, lo..0.5)
-            .map_err(plot_err)?;
-        c2.configure_mesh()
-            .x_desc("Frequency f [Hz]")
-            .y_desc("log10(A_k / A_1), swept points")
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .draw()
-            .map_err(plot_err)?;
-        let mut labelled = std::collections::HashSet::new();
-        for (i, k, pts) in series {
-            let c = COLOURS[i % COLOURS.len()];
-            let (on, off) = match k {
-                0 => (2, 3),
-                2 => (8, 3),
-                3 => (1, 0),
-                _ => (4, 2),
-            };
-            let style = c.stroke_width(if k == 3 { 2 } else { 1 });
-            let s = if off == 0 {
-                c2.draw_series(LineSeries::new(pts, style))
-                    .map_err(plot_err)?
-            } else {
-                c2.draw_series(DashedLineSeries::new(pts, on, off, style))
-                    .map_err(plot_err)?
-            };
-            if labelled.insert(k) {
-                s.label(format!("k = {k}")).legend(move |(x, y)| {
-                    DashedPathElement::new(
-                        vec![(x, y), (x + 20, y)],
-                        on.max(1),
-                        off,
-                        BLACK.stroke_width(1),
-                    )
-                });
-            }
-        }
-        c2.configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(plot_err)?;
-        root.present().map_err(plot_err)?;
+    let mut amp = Panel::new(
+        "First harmonic",
+        "Frequency f [Hz]",
+        &format!("First harmonic A1 [{unit}]; dashed: max|x|"),
+    );
+    amp.x_range = Some((f_min, f_max));
+    amp.y_range = Some((0.0, a_max * 1.08 * scale));
+    amp.legend = Corner::Outside;
+    for (i, l) in levels.iter().enumerate() {
+        let c = colour(i);
+        let branch = l
+            .sweep
+            .branch
+            .iter()
+            .filter(|p| hz(p.omega) >= f_min && hz(p.omega) <= f_max)
+            .map(|p| (hz(p.omega), p.amplitude(1) * scale))
+            .collect();
+        amp.series
+            .push(Series::new(branch, c, Style::Line(2)).label(format!("γ = {}", l.gamma)));
+        let max_x = l
+            .sweep
+            .points
+            .iter()
+            .map(|p| (hz(p.omega), max_abs_displacement(&p.coefficients) * scale))
+            .collect();
+        amp.series
+            .push(Series::new(max_x, c, Style::DashPattern(1, 5, 4)));
+        let step = l.sweep.points.len().div_ceil(100).max(1);
+        let marks = |stable: bool| {
+            l.sweep
+                .points
+                .iter()
+                .step_by(step)
+                .filter(|p| p.stable == stable)
+                .map(|p| (hz(p.omega), harmonic_amplitude(&p.coefficients, 1) * scale))
+                .collect::<Vec<_>>()
+        };
+        amp.series
+            .push(Series::new(marks(true), c, Style::Filled(2)));
+        amp.series
+            .push(Series::new(marks(false), c, Style::Dots(3)));
     }
-    Ok(svg)
+    // harmonic content A_k / A_1
+    let h = levels
+        .first()
+        .and_then(|l| l.sweep.points.first())
+        .map(|p| (p.coefficients.len() - 1) / 2)
+        .unwrap_or(1);
+    let mut lo: f64 = -1.0;
+    let mut content = Panel::new(
+        "Harmonic content",
+        "Frequency f [Hz]",
+        "A_k / A_1, swept points",
+    );
+    content.log_y = true;
+    content.legend = Corner::Outside;
+    let mut labelled = std::collections::HashSet::new();
+    for (i, l) in levels.iter().enumerate() {
+        for k in (0..=h).filter(|&k| k != 1).take(6) {
+            let pts: Vec<(f64, f64)> = l
+                .sweep
+                .points
+                .iter()
+                .filter_map(|p| {
+                    let r = harmonic_amplitude(&p.coefficients, k)
+                        / harmonic_amplitude(&p.coefficients, 1);
+                    (r > 1e-12).then(|| (hz(p.omega), r))
+                })
+                .collect();
+            for &(_, v) in &pts {
+                lo = lo.min(v.log10());
+            }
+            if pts.is_empty() {
+                continue;
+            }
+            let style = match k {
+                0 => Style::DashPattern(1, 2, 3),
+                2 => Style::DashPattern(1, 8, 3),
+                3 => Style::Line(2),
+                _ => Style::DashPattern(1, 4, 2),
+            };
+            let mut s = Series::new(pts, colour(i), style);
+            if labelled.insert(k) {
+                s = s.label(format!("k = {k}"));
+            }
+            content.series.push(s);
+        }
+    }
+    content.x_range = Some((f_min, f_max));
+    content.y_range = Some((10f64.powf(lo.floor().max(-12.0)), 10f64.powf(0.5)));
+    figure::render(title, &[amp, content], 1, 1100, 430)
 }

@@ -122,7 +122,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             2.0 * PI * f_max,
             &ladder,
             args.tol,
-            super::frf_mhb::settings_for(&model),
+            nlsdof::multi_harmonic::settings_for(&model),
             &ContinuationOptions::default(),
         )?;
         if !st.converged {

@@ -4,12 +4,12 @@
 //! written as a model file.
 
 use crate::error::CliError;
+use crate::figure::{self, colour, Panel, Series, Style};
 use nlsdof::vector_fitting::{
-    circle_fit, dominant_mode, fit, fit_auto, half_power, modal_parameters, sdof_linear_part,
-    InputKind, LinearPart, MassSource, ModalParameters, OutputKind, VfFit, VfOptions, C64,
+    identify_sdof, mobility, CircleFit, FrfWeighting, InputKind, MassSource, MeasuredFrf,
+    OutputKind, PoleCount, SdofIdError, SdofIdOptions, SdofIdentification, SdofLinear, C64,
 };
 use nlsdof::Model;
-use plotters::prelude::*;
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -134,20 +134,6 @@ fn usage(msg: String) -> CliError {
     CliError::Usage(msg)
 }
 
-/// Everything the verb computed (also used by the plot).
-struct Identified {
-    f_hz: Vec<f64>,
-    h: Option<Vec<C64>>,
-    mag: Vec<f64>,
-    fit: Option<VfFit>,
-    auto_history: Vec<(usize, f64)>,
-    modes: Vec<ModalParameters>,
-    chosen: Option<usize>,
-    linear: Option<LinearPart>,
-    half_power: Result<nlsdof::vector_fitting::HalfPower, String>,
-    circle: Result<nlsdof::vector_fitting::CircleFit, String>,
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
     crate::plot::check_svg_name(args.plot.as_deref())?;
     if args.max_iterations == 0 || args.max_iterations > 10_000 {
@@ -169,125 +155,61 @@ pub fn run(args: Args) -> Result<(), CliError> {
             return Err(usage(format!("--mass {m}: must be finite and > 0 kg")));
         }
     }
-    let keep: Vec<usize> = (0..table.f_hz.len())
-        .filter(|&i| table.f_hz[i] >= f_lo && table.f_hz[i] <= f_hi)
-        .collect();
-    if keep.is_empty() {
-        return Err(usage(format!("no FRF point in [{f_lo}, {f_hi}] Hz")));
-    }
-    let f_hz: Vec<f64> = keep.iter().map(|&i| table.f_hz[i]).collect();
-    let omega: Vec<f64> = f_hz.iter().map(|f| 2.0 * PI * f).collect();
-    let mag: Vec<f64> = keep.iter().map(|&i| table.magnitude[i]).collect();
-    let h: Option<Vec<C64>> = table
-        .values
-        .as_ref()
-        .map(|v| keep.iter().map(|&i| C64::new(v[i].0, v[i].1)).collect());
-    let input = match args.input {
-        InputArg::Force => InputKind::Force,
-        InputArg::Acceleration => InputKind::Acceleration,
+    let in_band = |f: f64| f >= f_lo && f <= f_hi;
+    // --poles matters (and is checked) only where vector fitting runs.
+    let poles = match parse_poles(&args.poles, args.max_poles) {
+        Ok(p) => p,
+        Err(e) if table.values.is_some() && table.f_hz.iter().any(|&f| in_band(f)) => {
+            return Err(e)
+        }
+        Err(_) => PoleCount::Fixed(1),
     };
     let output = match args.output {
         OutputArg::Displacement => OutputKind::Displacement,
         OutputArg::Velocity => OutputKind::Velocity,
         OutputArg::Acceleration => OutputKind::Acceleration,
     };
-    // Mobility (velocity/force-like) for the classical methods: H · (jω)^(1-p).
-    let to_mobility = |w: f64, z: C64| z * C64::new(0.0, w).powi(1 - output.power());
-    let mob_mag: Vec<f64> = omega
-        .iter()
-        .zip(&mag)
-        .map(|(&w, &m)| m * w.powi(1 - output.power()))
-        .collect();
-    let hp = half_power(&omega, &mob_mag).map_err(|e| e.to_string());
-
-    let mut id = Identified {
-        f_hz,
-        h: h.clone(),
-        mag,
-        fit: None,
-        auto_history: vec![],
-        modes: vec![],
-        chosen: None,
-        linear: None,
-        half_power: hp,
-        circle: Err("needs the phase (complex FRF)".into()),
+    let frf = MeasuredFrf {
+        omega: table.f_hz.iter().map(|f| 2.0 * PI * f).collect(),
+        magnitude: table.magnitude.clone(),
+        values: table
+            .values
+            .as_ref()
+            .map(|v| v.iter().map(|&(re, im)| C64::new(re, im)).collect()),
     };
-    if let Some(h) = &h {
-        let mob: Vec<C64> = omega
-            .iter()
-            .zip(h)
-            .map(|(&w, &z)| to_mobility(w, z))
-            .collect();
-        id.circle = circle_fit(&omega, &mob).map_err(|e| e.to_string());
-        let weights = match args.weight {
-            WeightArg::Uniform => None,
-            WeightArg::Inverse => Some(h.iter().map(|z| 1.0 / z.norm().max(1e-300)).collect()),
-        };
-        let opts = VfOptions {
-            constant: !args.no_constant,
-            proportional: args.proportional,
-            weights,
-            max_iterations: args.max_iterations,
-            ..Default::default()
-        };
-        let fitted = if args.poles.eq_ignore_ascii_case("auto") {
-            let a = fit_auto(&omega, h, &opts, args.max_poles, 0.9)?;
-            id.auto_history = a.history;
-            a.fit
-        } else {
-            let n: usize = args.poles.parse().ok().filter(|&n| n >= 1).ok_or_else(|| {
-                usage(format!(
-                    "--poles {:?}: expected a number of pole pairs >= 1 or `auto`",
-                    args.poles
-                ))
-            })?;
-            fit(
-                &omega,
-                h,
-                &VfOptions {
-                    pole_pairs: n,
-                    ..opts
-                },
-            )?
-        };
-        id.modes = modal_parameters(&fitted);
-        let chosen = match args.mode {
-            Some(k) if k >= 1 && k <= id.modes.len() => k - 1,
-            Some(k) => {
-                return Err(nlsdof::vector_fitting::IdentificationError::NoSuchMode {
-                    index: k,
-                    count: id.modes.len(),
-                }
-                .into())
-            }
-            None => dominant_mode(&id.modes)?,
-        };
-        id.linear = Some(sdof_linear_part(
-            &id.modes[chosen],
-            input,
-            output,
-            args.mass,
-        )?);
-        id.chosen = Some(chosen);
-        id.fit = Some(fitted);
-    }
-    // The linear part: from vector fitting, else from the half-power estimate.
-    let (alpha, delta, mass, source) = match (&id.linear, &id.half_power) {
-        (Some(lp), _) => (lp.alpha, lp.delta, lp.mass, lp.mass_source),
-        (None, Ok(hp)) => {
-            let (m, s) = match args.mass {
-                Some(m) => (Some(m), MassSource::Given),
-                None => (None, MassSource::Unidentified),
-            };
-            (hp.omega_n * hp.omega_n, 2.0 * hp.zeta * hp.omega_n, m, s)
-        }
-        (None, Err(e)) => {
-            return Err(usage(format!(
-                "{}: amplitude-only FRF and the half-power method failed: {e}",
-                args.frf.display()
-            )))
-        }
+    let opts = SdofIdOptions {
+        band: (2.0 * PI * f_lo, 2.0 * PI * f_hi),
+        poles,
+        input: match args.input {
+            InputArg::Force => InputKind::Force,
+            InputArg::Acceleration => InputKind::Acceleration,
+        },
+        output,
+        mass: args.mass,
+        mode: args.mode,
+        constant: !args.no_constant,
+        proportional: args.proportional,
+        weighting: match args.weight {
+            WeightArg::Uniform => FrfWeighting::Uniform,
+            WeightArg::Inverse => FrfWeighting::Inverse,
+        },
+        max_iterations: args.max_iterations,
     };
+    let id = identify_sdof(&frf, &opts).map_err(|e| match e {
+        SdofIdError::EmptyBand { .. } => usage(format!("no FRF point in [{f_lo}, {f_hi}] Hz")),
+        SdofIdError::HalfPowerFailed(e) => usage(format!(
+            "{}: amplitude-only FRF and the half-power method failed: {e}",
+            args.frf.display()
+        )),
+        SdofIdError::Fit(e) => e.into(),
+    })?;
+    let f_hz: Vec<f64> = id.points.iter().map(|&i| table.f_hz[i]).collect();
+    let SdofLinear {
+        alpha,
+        delta,
+        mass,
+        mass_source: source,
+    } = id.sdof;
 
     // Build everything before writing anything.
     let model_text = if args.out.is_some() {
@@ -310,13 +232,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         None
     };
     let svg = match &args.plot {
-        Some(_) => Some(render(&id, &omega, output)?),
+        Some(_) => Some(render(&id, &f_hz, output)?),
         None => None,
     };
     let text = if args.json {
-        json_report(&id, alpha, delta, mass, source)
+        json_report(&id, &f_hz, alpha, delta, mass, source)
     } else {
-        text_report(&id, &args, alpha, delta, mass, source)
+        text_report(&id, &f_hz, &args, alpha, delta, mass, source)
     };
     if let (Some(path), Some(s)) = (&args.out, &model_text) {
         nlsdof_io::atomic::write_atomic(path, s.as_bytes())?;
@@ -351,7 +273,8 @@ fn c(z: C64) -> serde_json::Value {
 }
 
 fn json_report(
-    id: &Identified,
+    id: &SdofIdentification,
+    f_hz: &[f64],
     alpha: f64,
     delta: f64,
     mass: Option<f64>,
@@ -384,16 +307,16 @@ fn json_report(
         Ok(h) => {
             json!({"f_n_hz": h.omega_n / (2.0 * PI), "zeta": h.zeta, "f_low_hz": h.omega_low / (2.0 * PI), "f_high_hz": h.omega_high / (2.0 * PI)})
         }
-        Err(e) => json!({"error": e}),
+        Err(e) => json!({"error": e.to_string()}),
     };
-    let cf = match &id.circle {
+    let cf = match circle_result(id) {
         Ok(c) => {
             json!({"f_n_hz": c.omega_n / (2.0 * PI), "zeta": c.zeta, "diameter": 2.0 * c.radius, "points": c.points, "relative_residual": c.relative_residual})
         }
         Err(e) => json!({"error": e}),
     };
     let out = json!({
-        "points": id.f_hz.len(),
+        "points": f_hz.len(),
         "vector_fitting": fit,
         "modes": modes,
         "sdof": {
@@ -411,7 +334,8 @@ fn json_report(
 }
 
 fn text_report(
-    id: &Identified,
+    id: &SdofIdentification,
+    f_hz: &[f64],
     args: &Args,
     alpha: f64,
     delta: f64,
@@ -423,9 +347,9 @@ fn text_report(
         s,
         "FRF {}: {} points, {:.6} .. {:.6} Hz",
         args.frf.display(),
-        id.f_hz.len(),
-        id.f_hz[0],
-        id.f_hz[id.f_hz.len() - 1]
+        f_hz.len(),
+        f_hz[0],
+        f_hz[f_hz.len() - 1]
     );
     if let Some(f) = &id.fit {
         if !id.auto_history.is_empty() {
@@ -548,7 +472,7 @@ fn text_report(
             let _ = writeln!(s, "half-power: n/a ({e})");
         }
     }
-    match &id.circle {
+    match circle_result(id) {
         Ok(c) => {
             let _ = writeln!(s, "circle fit: f_n = {:.6} Hz, zeta = {:.6e} ({} points, residual {:.2e} of the radius)", c.omega_n / (2.0 * PI), c.zeta, c.points, c.relative_residual);
         }
@@ -565,18 +489,33 @@ fn text_report(
     s
 }
 
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("plot: {e}"))
+/// The circle fit, or why there is none.
+fn circle_result(id: &SdofIdentification) -> Result<&CircleFit, String> {
+    match &id.circle {
+        Some(Ok(c)) => Ok(c),
+        Some(Err(e)) => Err(e.to_string()),
+        None => Err("needs the phase (complex FRF)".into()),
+    }
+}
+
+/// `--poles N|auto`.
+fn parse_poles(s: &str, max_pairs: usize) -> Result<PoleCount, CliError> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(PoleCount::Auto { max_pairs });
+    }
+    let n: usize = s.parse().ok().filter(|&n| n >= 1).ok_or_else(|| {
+        usage(format!(
+            "--poles {s:?}: expected a number of pole pairs >= 1 or `auto`"
+        ))
+    })?;
+    Ok(PoleCount::Fixed(n))
 }
 
 /// SVG: |H| (log) and phase vs frequency, measured points and fitted curve;
 /// Nyquist plot of the mobility with the fitted model and the circle fit.
-fn render(id: &Identified, omega: &[f64], output: OutputKind) -> Result<String, CliError> {
-    crate::fonts::register();
-    let blue = RGBColor(31, 119, 180);
-    let red = RGBColor(214, 39, 40);
-    let green = RGBColor(44, 160, 44);
-    let (f0, f1) = (id.f_hz[0], id.f_hz[id.f_hz.len() - 1]);
+fn render(id: &SdofIdentification, f_hz: &[f64], output: OutputKind) -> Result<String, CliError> {
+    let (blue, red, green) = (colour(0), colour(1), colour(2));
+    let (f0, f1) = (f_hz[0], f_hz[f_hz.len() - 1]);
     let (f0, f1) = if f1 > f0 {
         (f0, f1)
     } else {
@@ -591,7 +530,7 @@ fn render(id: &Identified, omega: &[f64], output: OutputKind) -> Result<String, 
         None => vec![],
     };
     let pos = |v: f64| v.is_finite() && v > 0.0;
-    let mut mags: Vec<f64> = id.mag.iter().copied().filter(|&v| pos(v)).collect();
+    let mut mags: Vec<f64> = id.magnitude.iter().copied().filter(|&v| pos(v)).collect();
     mags.extend(fit_curve.iter().map(|p| p.1.norm()).filter(|&v| pos(v)));
     let lo = mags.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = mags.iter().copied().fold(0.0, f64::max);
@@ -600,128 +539,99 @@ fn render(id: &Identified, omega: &[f64], output: OutputKind) -> Result<String, 
     } else {
         (1e-12, 1.0)
     };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (1200, 640)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (left, right) = root.split_horizontally(700);
-        let (top, bottom) = left.split_vertically(340);
-        let mut ch = ChartBuilder::on(&top)
-            .caption(
-                "Measured (points) and fitted (line) FRF",
-                ("sans-serif", 17),
-            )
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(80)
-            .build_cartesian_2d(f0..f1, (lo..hi).log_scale())
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .y_desc("|H|")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        ch.draw_series(
-            id.f_hz
-                .iter()
-                .zip(&id.mag)
-                .filter(|(_, &m)| pos(m))
-                .map(|(&f, &m)| Circle::new((f, m), 2, blue.stroke_width(1))),
+    let mut mag = Panel::new(
+        "Measured (points) and fitted (line) FRF",
+        "Frequency [Hz]",
+        "|H|",
+    );
+    mag.log_y = true;
+    mag.x_range = Some((f0, f1));
+    mag.y_range = Some((lo, hi));
+    mag.series.push(
+        Series::new(
+            f_hz.iter()
+                .copied()
+                .zip(id.magnitude.iter().copied())
+                .collect(),
+            blue,
+            Style::Dots(2),
         )
-        .map_err(plot_err)?;
-        if !fit_curve.is_empty() {
-            ch.draw_series(LineSeries::new(
-                fit_curve.iter().map(|&(f, z)| (f, z.norm().max(lo))),
-                red.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        }
-        let mut ch = ChartBuilder::on(&bottom)
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .build_cartesian_2d(f0..f1, -180.0..180.0)
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("Frequency [Hz]")
-            .y_desc("Phase [deg]")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        if let Some(h) = &id.h {
-            ch.draw_series(
-                id.f_hz
-                    .iter()
-                    .zip(h)
-                    .map(|(&f, z)| Circle::new((f, z.arg().to_degrees()), 2, blue.stroke_width(1))),
-            )
-            .map_err(plot_err)?;
-        }
-        if !fit_curve.is_empty() {
-            ch.draw_series(
+        .label("measured"),
+    );
+    let mut phase = Panel::new("Phase", "Frequency [Hz]", "Phase [deg]");
+    phase.x_range = Some((f0, f1));
+    phase.y_range = Some((-180.0, 180.0));
+    if let Some(h) = &id.values {
+        phase.series.push(Series::new(
+            f_hz.iter()
+                .zip(h)
+                .map(|(&f, z)| (f, z.arg().to_degrees()))
+                .collect(),
+            blue,
+            Style::Dots(2),
+        ));
+    }
+    if !fit_curve.is_empty() {
+        mag.series.push(
+            Series::new(
                 fit_curve
                     .iter()
-                    .map(|&(f, z)| Circle::new((f, z.arg().to_degrees()), 1, red.filled())),
+                    .map(|&(f, z)| (f, z.norm().max(lo)))
+                    .collect(),
+                red,
+                Style::Line(2),
             )
-            .map_err(plot_err)?;
-        }
-        // Nyquist of the mobility.
-        let p = 1 - output.power();
-        let mob = |w: f64, z: C64| z * C64::new(0.0, w).powi(p);
-        let meas: Vec<C64> = match &id.h {
-            Some(h) => omega.iter().zip(h).map(|(&w, &z)| mob(w, z)).collect(),
-            None => vec![],
-        };
-        let fitted: Vec<C64> = fit_curve
-            .iter()
-            .map(|&(f, z)| mob(2.0 * PI * f, z))
-            .collect();
-        let mut circle: Vec<C64> = vec![];
-        if let Ok(c) = &id.circle {
-            circle = (0..=200)
-                .map(|i| c.center + C64::from_polar(c.radius, 2.0 * PI * i as f64 / 200.0))
-                .collect();
-        }
-        let all: Vec<&C64> = meas.iter().chain(&fitted).chain(&circle).collect();
-        let ext = all
-            .iter()
-            .map(|z| z.re.abs().max(z.im.abs()))
-            .filter(|v| v.is_finite())
-            .fold(0.0, f64::max);
-        let ext = if ext > 0.0 { ext * 1.1 } else { 1.0 };
-        let mut ch = ChartBuilder::on(&right)
-            .caption("Nyquist (mobility): data, fit, circle", ("sans-serif", 17))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(80)
-            .build_cartesian_2d(-ext..ext, -ext..ext)
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("Re")
-            .y_desc("Im")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        ch.draw_series(
-            meas.iter()
-                .map(|z| Circle::new((z.re, z.im), 2, blue.stroke_width(1))),
-        )
-        .map_err(plot_err)?;
-        if !fitted.is_empty() {
-            ch.draw_series(LineSeries::new(
-                fitted.iter().map(|z| (z.re, z.im)),
-                red.stroke_width(2),
-            ))
-            .map_err(plot_err)?;
-        }
-        if !circle.is_empty() {
-            ch.draw_series(LineSeries::new(
-                circle.iter().map(|z| (z.re, z.im)),
-                green.stroke_width(1),
-            ))
-            .map_err(plot_err)?;
-        }
-        root.present().map_err(plot_err)?;
+            .label("vector fit"),
+        );
+        phase.series.push(Series::new(
+            fit_curve
+                .iter()
+                .map(|&(f, z)| (f, z.arg().to_degrees()))
+                .collect(),
+            red,
+            Style::Filled(1),
+        ));
     }
-    Ok(svg)
+    // Nyquist of the mobility.
+    let mob = |w: f64, z: C64| mobility(w, z, output);
+    let meas: Vec<C64> = match &id.values {
+        Some(h) => id.omega.iter().zip(h).map(|(&w, &z)| mob(w, z)).collect(),
+        None => vec![],
+    };
+    let fitted: Vec<C64> = fit_curve
+        .iter()
+        .map(|&(f, z)| mob(2.0 * PI * f, z))
+        .collect();
+    let mut circle: Vec<C64> = vec![];
+    if let Some(Ok(c)) = &id.circle {
+        circle = (0..=200)
+            .map(|i| c.center + C64::from_polar(c.radius, 2.0 * PI * i as f64 / 200.0))
+            .collect();
+    }
+    let ext = meas
+        .iter()
+        .chain(&fitted)
+        .chain(&circle)
+        .map(|z| z.re.abs().max(z.im.abs()))
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let ext = if ext > 0.0 { ext * 1.1 } else { 1.0 };
+    let mut nyquist = Panel::new("Nyquist (mobility): data, fit, circle", "Re", "Im");
+    nyquist.x_range = Some((-ext, ext));
+    nyquist.y_range = Some((-ext, ext));
+    let pts = |v: &[C64]| v.iter().map(|z| (z.re, z.im)).collect::<Vec<_>>();
+    nyquist
+        .series
+        .push(Series::new(pts(&meas), blue, Style::Dots(2)).label("data"));
+    if !fitted.is_empty() {
+        nyquist
+            .series
+            .push(Series::new(pts(&fitted), red, Style::Line(2)).label("fit"));
+    }
+    if !circle.is_empty() {
+        nyquist
+            .series
+            .push(Series::new(pts(&circle), green, Style::Line(1)).label("circle fit"));
+    }
+    figure::render("Linear identification", &[mag, phase, nyquist], 3, 400, 600)
 }

@@ -281,3 +281,27 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+/// The summary lines of a sweep's jumps (shared by the first-order and
+/// multi-harmonic `frf` text output).
+pub fn jumps_text(s: &mut String, jumps: &[nlsdof::Jump]) {
+    use std::fmt::Write as _;
+    let hz = |omega: f64| omega / (2.0 * PI);
+    if jumps.is_empty() {
+        let _ = writeln!(s, "  jumps              none");
+    }
+    for j in jumps {
+        let _ = writeln!(
+            s,
+            "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
+            hz(j.omega),
+            j.amplitude_before,
+            j.amplitude_after,
+            if j.amplitude_after > j.amplitude_before {
+                "up"
+            } else {
+                "down"
+            }
+        );
+    }
+}

@@ -3,8 +3,9 @@
 
 use crate::error::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use nlsdof::excitation::SampledInput;
-use nlsdof::simulation::{simulate, Method, Options, Sample, State};
+use nlsdof::simulation::{
+    simulate, simulate_upsampled, Method, Options, Sample, State, Upsampling,
+};
 use nlsdof::Model;
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid};
 use serde_json::json;
@@ -23,62 +24,6 @@ const ERROR_WARN: f64 = 1e-3;
 /// cubics and integrated with two fine samples per step, h = 2/(4 fs) =
 /// 1/(2 fs).
 const CUBIC_FACTOR: usize = 4;
-
-/// RK4 with two samples per step on the input upsampled `factor` times by
-/// cubic interpolation (h = 2/(factor fs)), in chunks so that the upsampled
-/// input never takes more than a few MB; `sink(k, u, x, v)` gets the state
-/// at every original sample k.
-#[allow(clippy::too_many_arguments)]
-fn run_cubic(
-    nm: &nlsdof::NormalisedModel,
-    raw: &[f64],
-    gain: f64,
-    t0: f64,
-    fs: f64,
-    factor: usize,
-    initial: State,
-    sink: &mut dyn FnMut(usize, f64, f64, f64),
-) -> Result<nlsdof::simulation::Summary, CliError> {
-    const CHUNK: usize = 1 << 16;
-    let n = raw.len();
-    let mut total = nlsdof::simulation::Summary::default();
-    let mut state = initial;
-    sink(0, gain * raw[0], state.x, state.v);
-    let mut start = 0;
-    while start + 1 < n {
-        let end = (start + CHUNK).min(n - 1);
-        let (lo, hi) = (start.saturating_sub(1), (end + 2).min(n - 1));
-        let fine = nlsdof::excitation::upsample_cubic(&raw[lo..=hi], factor);
-        let part = &fine[(start - lo) * factor..=(end - lo) * factor];
-        let inp = SampledInput::uniform(part, factor as f64 * fs, t0 + start as f64 / fs)?
-            .with_gain(gain)?;
-        let opts = Options {
-            method: Method::Rk4 {
-                samples_per_step: 2,
-            },
-            initial: state,
-            decimation: factor,
-        };
-        let s = simulate(nm, &inp, &opts, |smp: Sample| {
-            if smp.index > 0 {
-                sink(start + smp.index / factor, smp.u, smp.x, smp.v);
-            }
-        })?;
-        state = s.final_state;
-        total.steps += s.steps;
-        total.rhs_evaluations += s.rhs_evaluations;
-        total.events += s.events;
-        total.samples_per_step = s.samples_per_step;
-        total.final_time = t0 + end as f64 / fs;
-        start = end;
-    }
-    total.samples = n;
-    total.final_state = state;
-    if n == 1 {
-        total.final_time = t0;
-    }
-    Ok(total)
-}
 
 /// `--method` values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -340,15 +285,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
     };
     let summary = match signal.grid {
-        SignalGrid::Uniform { t0, fs } if cubic => run_cubic(
+        SignalGrid::Uniform { t0, fs } if cubic => simulate_upsampled(
             &nm,
             input.raw(),
-            gain,
-            t0,
-            fs,
-            CUBIC_FACTOR,
-            initial,
-            &mut sink,
+            (gain, t0, fs),
+            &Upsampling {
+                factor: CUBIC_FACTOR,
+                initial,
+            },
+            &mut |s: Sample| sink(s.index, s.u, s.x, s.v),
         )?,
         _ => simulate(&nm, &input, &opts, |s: Sample| sink(s.index, s.u, s.x, s.v))?,
     };
@@ -361,15 +306,16 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let error_estimate = match signal.grid {
         SignalGrid::Uniform { t0, fs } if check_n >= 2 => {
             let (mut diff, mut scale) = (0.0f64, 0.0f64);
-            run_cubic(
+            simulate_upsampled(
                 &nm,
                 &input.raw()[..check_n],
-                gain,
-                t0,
-                fs,
-                2 * CUBIC_FACTOR,
-                initial,
-                &mut |k, _, x, _| {
+                (gain, t0, fs),
+                &Upsampling {
+                    factor: 2 * CUBIC_FACTOR,
+                    initial,
+                },
+                &mut |s: Sample| {
+                    let (k, x) = (s.index, s.x);
                     if let Some(&xm) = xs.get(k) {
                         diff = diff.max((xm - x).abs());
                         scale = scale.max(x.abs());

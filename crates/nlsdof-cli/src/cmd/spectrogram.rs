@@ -4,14 +4,13 @@
 
 use crate::cmd::simulate::with_spinner;
 use crate::error::CliError;
-use nlsdof::excitation::SampledInput;
-use nlsdof::signal_processing::stft::{
-    compare, spectrogram, Detrend, Scaling, Spectrogram, SpectrogramDifference, StftOptions,
+use nlsdof::signal_processing::spectrogram_comparison::{
+    compare_records, ComparisonError, ComparisonOptions, SpectrogramComparison,
 };
+use nlsdof::signal_processing::stft::{Detrend, Scaling, Spectrogram, StftOptions};
 use nlsdof::signal_processing::{Symmetry, Window};
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid, UNIFORM_TOLERANCE};
 use serde_json::json;
-use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -189,7 +188,6 @@ fn non_uniform(path: &Path) -> CliError {
 /// Reads one named column of a CSV with a header (and, if present, its time
 /// column `t`/`time`/`t_s`).
 fn read_csv_column(path: &Path, name: &str, fs: Option<f64>) -> Result<Record, CliError> {
-    let disp = path.display();
     if let Some(fs) = fs {
         if !(fs.is_finite() && fs > 0.0) {
             return Err(CliError::Usage(format!(
@@ -197,123 +195,16 @@ fn read_csv_column(path: &Path, name: &str, fs: Option<f64>) -> Result<Record, C
             )));
         }
     }
-    let file = std::fs::File::open(path)
-        .map_err(|e| CliError::Usage(format!("cannot read {disp}: {e}")))?;
-    let mut lines = std::io::BufReader::with_capacity(1 << 20, file).lines();
-    let mut lineno = 0u64;
-    let mut next_line = || -> Result<Option<(u64, String)>, CliError> {
-        for l in lines.by_ref() {
-            lineno += 1;
-            let l = l.map_err(|e| CliError::Usage(format!("cannot read {disp}: {e}")))?;
-            let t = l.trim();
-            if !t.is_empty() && !t.starts_with('#') {
-                return Ok(Some((lineno, t.to_string())));
-            }
-        }
-        Ok(None)
-    };
-    let Some((_, header)) = next_line()? else {
-        return Err(CliError::Usage(format!("{disp}: no samples (empty file)")));
-    };
-    let names: Vec<String> = header
-        .split(',')
-        .map(|f| f.trim().to_ascii_lowercase())
-        .collect();
-    if names.iter().all(|n| n.parse::<f64>().is_ok()) {
-        return Err(CliError::Usage(format!(
-            "{disp}: --column {name} needs a header line naming the columns (the first line is numbers)"
-        )));
+    let s = nlsdof_io::signal_file::read_csv_column(path, name, fs)?;
+    match s.grid {
+        SignalGrid::Uniform { t0, fs } => Ok(Record {
+            values: s.values,
+            t0,
+            fs,
+            column: name.to_string(),
+        }),
+        SignalGrid::Times(_) => Err(non_uniform(path)),
     }
-    let col = names
-        .iter()
-        .position(|n| n == &name.to_ascii_lowercase())
-        .ok_or_else(|| {
-            CliError::Usage(format!(
-                "{disp}: no column named {name:?} (columns: {})",
-                names.join(",")
-            ))
-        })?;
-    let tcol = names
-        .iter()
-        .position(|n| ["t", "time", "t_s"].contains(&n.as_str()))
-        .filter(|&i| i != col);
-    match (tcol, fs) {
-        (Some(_), Some(fs)) => {
-            return Err(CliError::Usage(format!(
-                "{disp}: the file has a time column; --fs {fs} would contradict it (drop --fs)"
-            )))
-        }
-        (None, None) => {
-            return Err(CliError::Usage(format!(
-                "{disp}: no time column (t) in the header: give the sampling frequency with --fs HZ"
-            )))
-        }
-        _ => {}
-    }
-    let mut values = Vec::new();
-    let mut times = Vec::new();
-    let parse = |line: u64, field: Option<&str>, what: &str| -> Result<f64, CliError> {
-        let f = field.ok_or_else(|| {
-            CliError::Usage(format!(
-                "{disp}: line {line}: expected {} columns like the header",
-                names.len()
-            ))
-        })?;
-        let v: f64 = f.trim().parse().map_err(|_| {
-            CliError::Usage(format!("{disp}: line {line}: {what} {f:?} is not a number"))
-        })?;
-        if !v.is_finite() {
-            return Err(CliError::Usage(format!(
-                "{disp}: line {line}: {what} {v} is not finite"
-            )));
-        }
-        Ok(v)
-    };
-    while let Some((line, text)) = next_line()? {
-        let fields: Vec<&str> = text.split(',').collect();
-        if fields.len() != names.len() {
-            return Err(CliError::Usage(format!(
-                "{disp}: line {line}: expected {} columns like the header, found {}",
-                names.len(),
-                fields.len()
-            )));
-        }
-        values.push(parse(line, fields.get(col).copied(), name)?);
-        if let Some(tc) = tcol {
-            let t = parse(line, fields.get(tc).copied(), "time")?;
-            if let Some(&prev) = times.last() {
-                if t <= prev {
-                    return Err(CliError::Usage(format!(
-                        "{disp}: line {line}: time {t} does not increase (previous {prev})"
-                    )));
-                }
-            }
-            times.push(t);
-        }
-    }
-    if values.is_empty() {
-        return Err(CliError::Usage(format!(
-            "{disp}: no samples after the header"
-        )));
-    }
-    let (t0, fs) = match fs {
-        Some(fs) => (0.0, fs),
-        None => SampledInput::detect_uniform(&times, UNIFORM_TOLERANCE).ok_or_else(|| {
-            if times.len() < 2 {
-                CliError::Usage(format!(
-                    "{disp}: one sample cannot define a sampling frequency"
-                ))
-            } else {
-                non_uniform(path)
-            }
-        })?,
-    };
-    Ok(Record {
-        values,
-        t0,
-        fs,
-        column: name.to_string(),
-    })
 }
 
 fn stft_err(e: nlsdof::signal_processing::stft::StftError) -> CliError {
@@ -473,50 +364,34 @@ pub fn run(a: Args) -> Result<(), CliError> {
         ))
     })?;
     let t_stft = Instant::now();
-    let (s_meas, s_model) = with_spinner("computing spectrograms", || {
-        let s1 = spectrogram(&measured.values, &opts)?;
-        let s2 = match &model {
-            Some(m) => Some(spectrogram(&m.values, &opts)?),
-            None => None,
-        };
-        Ok::<_, nlsdof::signal_processing::stft::StftError>((s1, s2))
+    let cmp_opts = ComparisonOptions {
+        stft: opts,
+        band: (a.fmin, a.fmax),
+        time_offset: measured.t0,
+        floor_fraction: a.floor,
+    };
+    let cmp = with_spinner("computing spectrograms", || {
+        compare_records(
+            &measured.values,
+            model.as_ref().map(|m| m.values.as_slice()),
+            &cmp_opts,
+        )
     })
-    .map_err(stft_err)?;
+    .map_err(|e| match e {
+        ComparisonError::EmptyBand { low, high, last } => CliError::Usage(format!(
+            "no frequency bin in {low}..{high} Hz (bins every {} Hz up to {last} Hz)",
+            measured.fs / layout.nfft as f64,
+        )),
+        ComparisonError::Stft(e) => stft_err(e),
+    })?;
     let stft_s = t_stft.elapsed().as_secs_f64();
     drop(model);
-    let f_last = *s_meas.frequencies.last().unwrap_or(&0.0);
-    let band = (a.fmin.unwrap_or(0.0), a.fmax.unwrap_or(f_last));
-    let f_range = if a.fmin.is_some() || a.fmax.is_some() {
-        Some(band)
-    } else {
-        None
-    };
-    // restrict to the band and shift times to the record's clock
-    let shape = |s: &Spectrogram| {
-        let mut r = match f_range {
-            Some((lo, hi)) => s.restrict(lo, hi),
-            None => s.clone(),
-        };
-        r.times.iter_mut().for_each(|t| *t += measured.t0);
-        r
-    };
-    let sm = shape(&s_meas);
-    drop(s_meas);
-    if sm.n_freq == 0 {
-        return Err(CliError::Usage(format!(
-            "no frequency bin in {}..{} Hz (bins every {} Hz up to {} Hz)",
-            band.0,
-            band.1,
-            measured.fs / layout.nfft as f64,
-            f_last
-        )));
-    }
-    let sn = s_model.as_ref().map(shape);
-    drop(s_model);
-    let diff: Option<SpectrogramDifference> = match &sn {
-        Some(sn) => Some(compare(&sm, sn, a.floor).map_err(stft_err)?),
-        None => None,
-    };
+    let SpectrogramComparison {
+        measured: sm,
+        model: sn,
+        difference: diff,
+        band: f_range,
+    } = cmp;
 
     // --- render everything in memory, then write all files atomically
     let label_m = label_of(&a.input, &measured.column);

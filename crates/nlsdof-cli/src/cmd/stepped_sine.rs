@@ -4,7 +4,7 @@
 
 use super::simulate::{load_model, Progress};
 use crate::error::CliError;
-use nlsdof::stepped_sine::{run_levels, RigOptions, RigSweep};
+use nlsdof::stepped_sine::{run_sweeps, RigOptions, RigSweep};
 use nlsdof::SweepDirection;
 use nlsdof_io::signal_file::CsvWriter;
 use serde_json::json;
@@ -195,11 +195,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     };
     let progress = Progress::new((gammas.len() * n * dirs.len()) as u64, "stepped sine");
     let t_sim = Instant::now();
-    let mut sweeps: Vec<(usize, RigSweep)> = vec![];
-    for &dir in &dirs {
-        let res = run_levels(&nm, &gammas, &omegas, dir, &opts, &|| progress.inc(1))?;
-        sweeps.extend(res.into_iter().enumerate());
-    }
+    let sweeps: Vec<(usize, RigSweep)> =
+        run_sweeps(&nm, &gammas, &omegas, &dirs, &opts, &|| progress.inc(1))?
+            .into_iter()
+            .enumerate()
+            .map(|(i, sw)| (i % gammas.len(), sw))
+            .collect();
     let sim_s = t_sim.elapsed().as_secs_f64();
     progress.finish();
     let name = |d: SweepDirection| {

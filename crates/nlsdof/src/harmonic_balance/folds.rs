@@ -173,12 +173,12 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
         .collect();
     // Cells where the analytic one-root certificate holds contain no fold:
     // skip them (no root isolation needed there).
-    let fast = super::sweep::fast_path_possible(r);
+    let fast = super::certificate::fast_path_possible(r);
     let eqs: Vec<_> = grid.iter().map(|&w| r.equation(w)).collect();
     let mut budget = REFINE_BUDGET;
     let mut prev: Option<Sample> = None;
     for i in 1..=GRID {
-        if fast && super::sweep::certify_cell(&eqs[i - 1], &eqs[i]) {
+        if fast && super::certificate::certify_cell(&eqs[i - 1], &eqs[i]) {
             prev = None;
             continue;
         }

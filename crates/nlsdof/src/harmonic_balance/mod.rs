@@ -45,6 +45,8 @@
 //! 2 d₀ + (2 + η) d₁ x^η > 0   (no Hopf instability; always true for η > −2)
 //! ```
 
+pub mod branches;
+mod certificate;
 mod equation;
 mod folds;
 mod sweep;
@@ -438,6 +440,46 @@ pub fn modulation_frequencies(
     let centre = 1.0 + 0.5 * keq_over_k;
     let half = disc.sqrt();
     Ok(Some((wn * (centre - half), wn * (centre + half))))
+}
+
+/// One input level's forced response, its stepped-sine sweep and its
+/// phase-quadrature point ([`level_responses`]).
+#[derive(Debug, Clone)]
+pub struct LevelResponse {
+    /// γ, m/s² zero-to-peak.
+    pub gamma: f64,
+    pub response: ForcedResponse,
+    pub sweep: Sweep,
+    pub phase_quadrature: Option<PhaseQuadrature>,
+}
+
+/// The response of `model` at each level of `gammas` (m/s², zero-to-peak):
+/// the sweep over the increasing `omegas` (rad/s) in `direction` and the
+/// phase-quadrature point; levels computed in parallel (rayon), results in
+/// the order of `gammas` (on failure, the first failing level's error).
+pub fn level_responses(
+    model: &Model,
+    gammas: &[f64],
+    omegas: &[f64],
+    direction: SweepDirection,
+    formulation: Formulation,
+) -> Result<Vec<LevelResponse>, SolveError> {
+    use rayon::prelude::*;
+    let levels: Vec<Result<LevelResponse, SolveError>> = gammas
+        .par_iter()
+        .map(|&gamma| {
+            let response = ForcedResponse::new(model, gamma, formulation)?;
+            let sweep = response.sweep(omegas, direction)?;
+            let phase_quadrature = response.phase_quadrature()?;
+            Ok(LevelResponse {
+                gamma,
+                response,
+                sweep,
+                phase_quadrature,
+            })
+        })
+        .collect();
+    levels.into_iter().collect()
 }
 
 /// Stepped-sine sweeps of one model at several input levels `gammas`

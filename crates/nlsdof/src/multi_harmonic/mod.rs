@@ -30,6 +30,7 @@
 pub mod aft;
 pub mod backbone;
 pub mod continuation;
+pub mod levels;
 pub mod stability;
 pub mod sweep;
 pub mod system;
@@ -38,6 +39,7 @@ pub mod truncation;
 pub use continuation::{
     continue_in_gamma, continue_in_omega, Branch, BranchPoint, ContinuationOptions, LimitPoint,
 };
+pub use levels::{level_sweeps, settings_for, LevelSweep};
 pub use stability::{hill_floquet_exponents, FloquetExponents};
 pub use system::{HbSystem, Settings, MAX_HARMONICS, MAX_SAMPLES};
 

@@ -4,14 +4,21 @@
 //! * [`welch`] — Welch-averaged auto/cross spectra, the H1 and H2 FRF
 //!   estimators, ordinary coherence, and the spectral ratio `Y/X` of a
 //!   single record (sine sweep or impact).
+//! * [`stft`] — STFT spectrograms and the Eq 33 difference of two.
+//! * [`spectrogram_comparison`] — a measured record against the model's in
+//!   one call ([`compare_records`]): spectrograms, band, Eq 33.
 //!
 //! Pure mathematics: samples in, spectra out (frequencies in Hz here,
 //! since they come from a sampling frequency in Hz).
 
+pub mod spectrogram_comparison;
 pub mod stft;
 pub mod welch;
 pub mod window;
 
+pub use spectrogram_comparison::{
+    compare_records, ComparisonError, ComparisonOptions, SpectrogramComparison,
+};
 pub use welch::{spectral_ratio, welch_frf, FrfEstimate, SpectralRatio, WelchOptions};
 pub use window::{Symmetry, Window};
 

@@ -12,7 +12,7 @@
 //!   same way); then slip with `s = sgn F`.
 
 use super::law::{Dyn, Law};
-use super::rk4::step;
+use super::rk4_step::step;
 use super::{SimulationError, Summary};
 
 /// Friction state.

@@ -33,6 +33,9 @@
 //!     (mid-step) sample is the cubic Hermite interpolant of
 //!     `(x, v, a)` at the step ends (`x_mid = (x₀+x₁)/2 + h (v₀−v₁)/8`,
 //!     `v_mid = (v₀+v₁)/2 + h (a₀−a₁)/8`), O(h⁴) like the method.
+//! * **RK4 on a cubic-upsampled input** ([`simulate_upsampled`]): a
+//!   uniformly sampled record upsampled by cubics, two fine samples per
+//!   step, in chunks; the state at every original sample.
 //! * **Dormand–Prince 5(4)** with embedded error control and the 4th-order
 //!   continuous extension ([`Method::DormandPrince`]), the accuracy
 //!   reference. It treats the input as piecewise linear and **restarts at
@@ -69,7 +72,7 @@
 //!
 //! The exponent kind of each term is resolved once and every loop is
 //! compiled per combination (integer exponents: multiplications only; real
-//! exponents: a table-driven power [`law`]). With real exponents the power
+//! exponents: a table-driven power `law`). With real exponents the power
 //! of the *velocity* sits on the critical dependency chain of every RK4
 //! stage, so the default loop (uniform input, two samples per step)
 //! evaluates the powers at the middle and end of the step after next at
@@ -86,11 +89,13 @@
 
 pub(crate) mod coulomb;
 mod dopri;
-mod error;
 pub(crate) mod law;
 pub(crate) mod rk4;
+pub(crate) mod rk4_step;
+mod upsampled;
 
-pub use error::SimulationError;
+pub use crate::error::SimulationError;
+pub use upsampled::{simulate_upsampled, Upsampling};
 
 use crate::excitation::{Excitation, SampledInput};
 use crate::model::NormalisedModel;

@@ -21,17 +21,25 @@
 //!   model (Civera et al. 2021, Section 2.3, Table 3).
 //! * [`simple`] — single-mode half-power bandwidth and circle (Nyquist)
 //!   fit, for comparison and for amplitude-only data.
+//! * [`sdof`] — the whole linear identification of an SDoF from a measured
+//!   FRF in one call ([`identify_sdof`]): band, mobility, half-power
+//!   fallback, vector fitting, mode choice, linear part.
 //!
 //! Frequencies are angular (rad/s) throughout.
 
 pub mod frvf;
 pub mod modal;
+pub mod sdof;
 pub mod simple;
 
 pub use frvf::{fit, fit_auto, AutoOrder, PoleTerm, Spacing, Termination, VfFit, VfOptions};
 pub use modal::{
     dominant_mode, modal_parameters, sdof_linear_part, InputKind, LinearPart, MassSource,
     ModalParameters, OutputKind,
+};
+pub use sdof::{
+    identify_sdof, mobility, FrfWeighting, MeasuredFrf, PoleCount, SdofIdError, SdofIdOptions,
+    SdofIdentification, SdofLinear,
 };
 pub use simple::{circle_fit, half_power, CircleFit, HalfPower};
 
@@ -88,7 +96,7 @@ pub enum IdentificationError {
 
 /// Validates an FRF: equal lengths, finite values, frequencies `>= 0` and
 /// strictly increasing.
-pub fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), IdentificationError> {
+pub(crate) fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), IdentificationError> {
     if omega.len() != h.len() {
         return Err(IdentificationError::LengthMismatch {
             frequencies: omega.len(),

@@ -1,10 +1,11 @@
 //! `report.md`: the figures and tables with a sentence or two on each.
 
-use super::compute::{
-    Demo, CHIRP_F0, CHIRP_F1, CHIRP_GAMMA, CHIRP_RATE, FS_RECORD, F_MAX, F_MIN, LEVELS_PP, SUBSTEPS,
+use super::table::{sig, Table};
+use nlsdof::demo::spectra::FLOOR_FRACTION;
+use nlsdof::demo::{
+    noise_model, Demo, CHIRP_F0, CHIRP_F1, CHIRP_GAMMA, CHIRP_RATE, FS_RECORD, F_MAX, F_MIN,
+    LEVELS_PP, SUBSTEPS,
 };
-use super::report::{fmt_noise, sig, Table};
-use super::spectra::FLOOR_FRACTION;
 use std::fmt::Write as _;
 
 fn table<'a>(tables: &'a [Table], name: &str) -> &'a Table {
@@ -75,7 +76,7 @@ amplitude, state carried to the next step) at the five levels of Table 2, sweep 
 {F_MIN}–{F_MAX} Hz in {} steps. The rig records the first-harmonic amplitude and phase lag \
 of x. **Noise model:** {}.\n",
         st.steps,
-        fmt_noise(st.noise_rel)
+        noise_model(st.noise_rel)
     );
     s.push_str(&table(tables, "rig").markdown());
     for run in &demo.runs {
@@ -128,7 +129,7 @@ of half the record, 50 % overlap): its window changes appreciably within the {} 
 time 1/(ζω_n) of the resonance while the sweep crosses it, which biases the damping upward — \
 the reason the whole-record estimate is used.\n",
         (CHIRP_F1 - CHIRP_F0) / CHIRP_RATE,
-        super::compute::CHIRP_TAIL_S,
+        nlsdof::demo::CHIRP_TAIL_S,
         FS_RECORD * SUBSTEPS as f64,
         demo.runs
             .first()
@@ -303,8 +304,8 @@ of the recorded and the model spectrograms, levels 1, 3 and 5 as in the paper, z
 {:.2}–{:.2} Hz. Look for the ridge climbing from {F_MIN} to {F_MAX} Hz with the step \
 frequency and its maximum at resonance; recorded and model should look the same, the recorded \
 one with a noise floor.\n",
-            super::spectra::PLOT_BAND.0,
-            super::spectra::PLOT_BAND.1
+            nlsdof::demo::spectra::PLOT_BAND.0,
+            nlsdof::demo::spectra::PLOT_BAND.1
         );
         for (f, _) in pngs {
             img(&mut s, f, f);

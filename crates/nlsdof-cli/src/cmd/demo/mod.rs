@@ -20,14 +20,13 @@
 //! Nothing is written under the target name until everything succeeded:
 //! the folder is built as a hidden sibling and renamed at the end.
 
-mod compute;
 mod markdown;
-mod plots;
+mod progress;
 mod report;
-mod spectra;
+mod table;
 
 use crate::error::CliError;
-use compute::{Demo, Settings};
+use nlsdof::demo::{Demo, Settings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -121,7 +120,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     );
     let staging = Staging::create(&args.out)?;
     let mut demo = Demo::new(settings);
-    demo.run_all()?;
+    demo.run_all(&progress::Bars::default())?;
     let t_report = Instant::now();
     let summary = report::write_all(&demo, staging.path(), &args.out)?;
     demo.timings.push((

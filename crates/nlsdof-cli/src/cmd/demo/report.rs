@@ -1,12 +1,13 @@
 //! Stage 6: figures, tables (markdown + CSV), `summary.json` and `report.md`.
 
-use super::compute::{
-    Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, CHIRP_NOISE, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
-    RIG_NOISE_ABS, RIG_NOISE_PHASE_DEG, SPECTROGRAM_LEVELS, TIME_NOISE,
-};
-use super::plots::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
-use super::spectra::PLOT_BAND;
+use super::table::{sig, Table};
 use crate::error::CliError;
+use crate::figure::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
+use nlsdof::demo::spectra::PLOT_BAND;
+use nlsdof::demo::{
+    noise_model, Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
+    SPECTROGRAM_LEVELS,
+};
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{PhaseQuadratureRow, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::atomic::write_atomic;
@@ -19,103 +20,8 @@ fn hz(w: f64) -> f64 {
     w / TAU
 }
 
-/// `v` with `n` significant digits, plain notation for 1e-3 <= |v| < 1e6.
-pub fn sig(v: f64, n: usize) -> String {
-    if !v.is_finite() {
-        return if v.is_nan() {
-            "-".into()
-        } else {
-            format!("{v}")
-        };
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let e = v.abs().log10().floor() as i32;
-    if (-3..6).contains(&e) {
-        let d = (n as i32 - 1 - e).max(0) as usize;
-        format!("{v:.d$}")
-    } else {
-        format!("{:.*e}", n.saturating_sub(1), v)
-    }
-}
-
 fn pct(v: Option<f64>) -> String {
     v.map(|x| format!("{x:+.3}")).unwrap_or_else(|| "-".into())
-}
-
-/// A table rendered both as markdown and CSV.
-pub struct Table {
-    pub name: &'static str,
-    pub headers: Vec<String>,
-    pub rows: Vec<Vec<String>>,
-}
-
-impl Table {
-    pub fn new(name: &'static str, headers: &[&str]) -> Self {
-        Self {
-            name,
-            headers: headers.iter().map(|s| s.to_string()).collect(),
-            rows: Vec::new(),
-        }
-    }
-    pub fn push(&mut self, row: Vec<String>) {
-        self.rows.push(row);
-    }
-    pub fn markdown(&self) -> String {
-        let esc = |c: &String| c.replace('|', "\\|");
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "| {} |",
-            self.headers.iter().map(esc).collect::<Vec<_>>().join(" | ")
-        );
-        let _ = writeln!(
-            s,
-            "|{}",
-            self.headers.iter().map(|_| " --- |").collect::<String>()
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "| {} |",
-                r.iter()
-                    .map(esc)
-                    .collect::<Vec<_>>()
-                    .join(" | ")
-                    .replace('\n', " ")
-            );
-        }
-        s
-    }
-    pub fn csv(&self) -> String {
-        let q = |c: &str| {
-            let c = c.replace("<br>", " ");
-            if c.contains(',') || c.contains('"') {
-                format!("\"{}\"", c.replace('"', "\"\""))
-            } else {
-                c
-            }
-        };
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "{}",
-            self.headers
-                .iter()
-                .map(|h| q(h))
-                .collect::<Vec<_>>()
-                .join(",")
-        );
-        for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "{}",
-                r.iter().map(|c| q(c)).collect::<Vec<_>>().join(",")
-            );
-        }
-        s
-    }
 }
 
 /// Physical name, unit and mass scaling of θ's entries.
@@ -315,7 +221,7 @@ fn fig4(demo: &Demo, dir: &Path) -> Result<(), CliError> {
 }
 
 /// Data (dots) and the fitted model's branch-following sweep (lines).
-fn fit_panel(run: &super::compute::ConfigRun, f: &FitEntry) -> Panel {
+fn fit_panel(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Panel {
     let m = run.measured.as_ref().expect("ran");
     let mut p = Panel::new(
         format!("{}: {}", run.cfg.title, f.label),
@@ -975,7 +881,7 @@ pub fn build_tables(demo: &Demo) -> Vec<Table> {
     tables
 }
 
-fn fit_json(run: &super::compute::ConfigRun, f: &FitEntry) -> Value {
+fn fit_json(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Value {
     let r = &f.result;
     let mass = run.cfg.truth.mass;
     let params: Vec<Value> = (0..N_PARAMS)
@@ -1113,14 +1019,6 @@ fn finite_or_null(v: f64) -> Value {
     }
 }
 
-fn noise_model(rel: f64) -> String {
-    format!(
-        "rig amplitudes a_meas = a (1 + {rel} e1) + {RIG_NOISE_ABS} m * e2, phases phi_meas = phi + {RIG_NOISE_PHASE_DEG} deg * e3; \
-chirp input and output + {CHIRP_NOISE} x their RMS * e; recorded stepped-sine displacement + {TIME_NOISE} x its RMS * e; \
-e independent standard normal (SplitMix64 + Box-Muller, one stream per channel seeded from --seed)"
-    )
-}
-
 /// Writes the figures, tables and a provisional summary; returns what [`finish`] needs.
 /// The exponent landscape of the unloaded wing's generalised fit with the
 /// linear part free (`g-free`): where the equation-error minima are and
@@ -1144,7 +1042,7 @@ fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, CliError> {
 }
 
 pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliError> {
-    let pb = super::compute::stage_bar(8, "6/6 report");
+    let pb = super::progress::stage_bar(8, "6/6 report");
     pb.set_message("figures (SVG, PNG) and tables");
     fig2(demo, dir)?;
     pb.inc(1);
@@ -1253,10 +1151,6 @@ pub fn finish(demo: &Demo, dir: &Path, w: Written, total: f64) -> Result<Value, 
     let md = super::markdown::report_md(demo, &w.tables, &w.figures, &tt);
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     Ok(summary)
-}
-
-pub fn fmt_noise(rel: f64) -> String {
-    noise_model(rel)
 }
 
 /// A few lines on stdout (without --json): the key numbers of each configuration.

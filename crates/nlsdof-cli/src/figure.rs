@@ -1,13 +1,16 @@
-//! SVG line plots of the demo: a grid of panels, each with its own axes and
-//! a hand-laid legend (same approach as `crate::plot`: plotters' SVG
-//! backend writes `<text>` elements, so no fonts are needed; the legend is
-//! placed by hand because plotters can only estimate text extents).
+//! The figure layer of every command and of the demo: the palette, and
+//! line figures as a grid of panels, each with its own axes and a
+//! hand-laid legend, drawn by one code path to SVG ([`render`]) or PNG
+//! ([`render_png`]). plotters' SVG backend writes `<text>` elements, so no
+//! fonts are needed to view it; the legend is placed by hand because
+//! plotters can only estimate text extents. Spectrogram heat maps and
+//! waterfalls are in [`crate::png`].
 
 use crate::error::CliError;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-/// Tableau-10 (as `crate::plot`), one colour per input level.
+/// Tableau-10 without its grey, one colour per input level or series.
 pub const COLOURS: [RGBColor; 9] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
@@ -19,9 +22,14 @@ pub const COLOURS: [RGBColor; 9] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
+/// Reference lines, backbones, measured points in the background.
 pub const GREY: RGBColor = RGBColor(150, 150, 150);
+/// Text-like dark lines.
 pub const DARK: RGBColor = RGBColor(40, 40, 40);
+/// Mesh lines of a chart (major, minor).
+pub const MESH: (RGBColor, RGBColor) = (RGBColor(222, 222, 222), RGBColor(244, 244, 244));
 
+/// The `i`-th colour of the palette (cycling).
 pub fn colour(i: usize) -> RGBColor {
     COLOURS[i % COLOURS.len()]
 }
@@ -32,10 +40,15 @@ pub enum Style {
     Line(u32),
     /// Dashed line of the given width.
     Dashed(u32),
+    /// Dashed line: width, dash and gap lengths (pixels).
+    DashPattern(u32, u32, u32),
     /// Hollow circles of the given radius.
     Dots(u32),
     /// Filled circles of the given radius.
     Filled(u32),
+    /// Arrows of the given width, one from each even-indexed point to the
+    /// next (e.g. a jump of a sweep), heads in pixels.
+    Arrow(u32),
 }
 
 #[derive(Debug, Clone)]
@@ -82,6 +95,8 @@ pub struct Panel {
     pub legend: Corner,
     /// Logarithmic y axis (values <= 0 are dropped).
     pub log_y: bool,
+    /// Tick label of a value on a linear axis of the given span.
+    pub tick_format: fn(f64, f64) -> String,
 }
 
 impl Panel {
@@ -95,6 +110,7 @@ impl Panel {
             y_range: None,
             legend: Corner::TopLeft,
             log_y: false,
+            tick_format: tick,
         }
     }
 }
@@ -107,7 +123,7 @@ fn ensure_font() {
 }
 
 fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("demo: cannot draw a figure: {e}"))
+    CliError::Usage(format!("cannot draw a figure: {e}"))
 }
 
 /// Tick label with decimals suited to an axis spanning `span`.
@@ -162,28 +178,65 @@ pub fn render(
     h: u32,
 ) -> Result<String, CliError> {
     ensure_font();
-    let cols = cols.max(1);
-    let rows = panels.len().div_ceil(cols).max(1);
-    let title_h = 40u32;
-    let (width, height) = (w * cols as u32, h * rows as u32 + title_h);
+    let (width, height) = figure_size(panels, cols, w, h);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        root.draw(&Text::new(
-            title.to_string(),
-            (16, 12),
-            ("sans-serif", 19).into_font().color(&BLACK),
-        ))
-        .map_err(plot_err)?;
-        let (_, body) = root.split_vertically(title_h);
-        let areas = body.split_evenly((rows, cols));
-        for (panel, area) in panels.iter().zip(areas.iter()) {
-            draw_panel(&root, area, panel)?;
-        }
-        root.present().map_err(plot_err)?;
+        draw_figure(&root, title, panels, cols)?;
     }
     Ok(svg)
+}
+
+/// The same figure as [`render`], as PNG bytes (drawn by the same code on
+/// the bitmap backend; no command writes a PNG line figure yet).
+#[cfg_attr(not(test), allow(dead_code))]
+pub fn render_png(
+    title: &str,
+    panels: &[Panel],
+    cols: usize,
+    w: u32,
+    h: u32,
+) -> Result<Vec<u8>, CliError> {
+    ensure_font();
+    let (width, height) = figure_size(panels, cols, w, h);
+    let mut buf = vec![0u8; width as usize * height as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
+        draw_figure(&root, title, panels, cols)?;
+    }
+    crate::png::encode_png(&buf, width, height)
+}
+
+const TITLE_H: u32 = 40;
+
+fn figure_size(panels: &[Panel], cols: usize, w: u32, h: u32) -> (u32, u32) {
+    let cols = cols.max(1);
+    let rows = panels.len().div_ceil(cols).max(1);
+    (w * cols as u32, h * rows as u32 + TITLE_H)
+}
+
+fn draw_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    panels: &[Panel],
+    cols: usize,
+) -> Result<(), CliError> {
+    let cols = cols.max(1);
+    let rows = panels.len().div_ceil(cols).max(1);
+    root.fill(&WHITE).map_err(plot_err)?;
+    root.draw(&Text::new(
+        title.to_string(),
+        (16, 12),
+        ("sans-serif", 19).into_font().color(&BLACK),
+    ))
+    .map_err(plot_err)?;
+    let (_, body) = root.split_vertically(TITLE_H);
+    let areas = body.split_evenly((rows, cols));
+    for (panel, area) in panels.iter().zip(areas.iter()) {
+        draw_panel(root, area, panel)?;
+    }
+    root.present().map_err(plot_err)?;
+    Ok(())
 }
 
 fn draw_panel<DB: DrawingBackend>(
@@ -219,7 +272,8 @@ fn draw_panel<DB: DrawingBackend>(
     };
     let ((x0, x1), (y0, y1)) = auto_range(panel);
     let (xs, ys) = (x1 - x0, y1 - y0);
-    let x_fmt = |v: &f64| tick(*v, xs);
+    let fmt = panel.tick_format;
+    let x_fmt = |v: &f64| fmt(*v, xs);
     let log_y = panel.log_y;
     let y_fmt = move |v: &f64| {
         if log_y {
@@ -227,7 +281,7 @@ fn draw_panel<DB: DrawingBackend>(
             let d = (1.0 - p.log10().floor()).clamp(0.0, 8.0) as usize;
             format!("{p:.d$}")
         } else {
-            tick(*v, ys)
+            fmt(*v, ys)
         }
     };
     let mut chart = ChartBuilder::on(area)
@@ -248,8 +302,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_label_formatter(&y_fmt)
         .axis_desc_style(("sans-serif", 13))
         .label_style(("sans-serif", 12))
-        .bold_line_style(RGBColor(222, 222, 222))
-        .light_line_style(RGBColor(244, 244, 244))
+        .bold_line_style(MESH.0)
+        .light_line_style(MESH.1)
         .draw()
         .map_err(plot_err)?;
     let inside = |&(x, y): &(f64, f64)| {
@@ -274,6 +328,16 @@ fn draw_panel<DB: DrawingBackend>(
                     .draw_series(DashedLineSeries::new(pts, 6, 4, s.colour.stroke_width(wd)))
                     .map_err(plot_err)?;
             }
+            Style::DashPattern(wd, on, off) => {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        pts,
+                        on.max(1),
+                        off,
+                        s.colour.stroke_width(wd),
+                    ))
+                    .map_err(plot_err)?;
+            }
             Style::Dots(r) => {
                 chart
                     .draw_series(
@@ -293,6 +357,13 @@ fn draw_panel<DB: DrawingBackend>(
                             .map(|&p| Circle::new(p, r, s.colour.filled())),
                     )
                     .map_err(plot_err)?;
+            }
+            Style::Arrow(wd) => {
+                for pair in s.points.chunks_exact(2) {
+                    let from = chart.backend_coord(&pair[0]);
+                    let to = chart.backend_coord(&pair[1]);
+                    draw_arrow(root, from, to, s.colour, wd)?;
+                }
             }
         }
     }
@@ -349,6 +420,14 @@ fn draw_panel<DB: DrawingBackend>(
                     s.colour.stroke_width(wd.max(2)),
                 ))
                 .map_err(plot_err)?,
+            Style::DashPattern(wd, on, off) => root
+                .draw(&DashedPathElement::new(
+                    vec![(lx0, y), (lx1, y)],
+                    on.max(1),
+                    off,
+                    s.colour.stroke_width(wd.max(1)),
+                ))
+                .map_err(plot_err)?,
             Style::Dots(r) => root
                 .draw(&Circle::new(
                     ((lx0 + lx1) / 2, y),
@@ -363,11 +442,41 @@ fn draw_panel<DB: DrawingBackend>(
                     s.colour.filled(),
                 ))
                 .map_err(plot_err)?,
+            Style::Arrow(wd) => {
+                let x = (lx0 + lx1) / 2;
+                draw_arrow(root, (x, y - row / 2), (x, y + row / 2), s.colour, wd)?
+            }
         }
         root.draw(&Text::new(
             s.label.clone().unwrap_or_default(),
             (bx + 40, y - font / 2 - 1),
             ("sans-serif", font as u32).into_font().color(&BLACK),
+        ))
+        .map_err(plot_err)?;
+    }
+    Ok(())
+}
+
+/// A vertical arrow in pixels (`from` and `to` share x), head at `to`.
+fn draw_arrow<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    from: (i32, i32),
+    to: (i32, i32),
+    c: RGBColor,
+    width: u32,
+) -> Result<(), CliError> {
+    let dy = to.1 - from.1;
+    let head = 9.min(dy.abs());
+    let base = to.1 - dy.signum() * head;
+    root.draw(&PathElement::new(
+        vec![from, (to.0, base)],
+        c.stroke_width(width),
+    ))
+    .map_err(plot_err)?;
+    if head > 0 {
+        root.draw(&Polygon::new(
+            vec![(to.0 - 5, base), (to.0 + 5, base), to],
+            c.filled(),
         ))
         .map_err(plot_err)?;
     }
@@ -393,7 +502,9 @@ mod tests {
         );
         p.series
             .push(Series::new(vec![(0.5, 1.5)], colour(1), Style::Dots(2)).label("dots"));
-        let svg = render("title", &[p.clone(), p], 2, 400, 300).unwrap();
+        let svg = render("title", &[p.clone(), p.clone()], 2, 400, 300).unwrap();
         assert!(svg.starts_with("<svg") && svg.contains("a panel") && svg.contains("dots"));
+        let png = render_png("title", &[p.clone(), p], 2, 400, 300).unwrap();
+        assert!(png.starts_with(b"\x89PNG"));
     }
 }

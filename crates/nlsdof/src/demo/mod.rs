@@ -1,25 +1,48 @@
-//! The demo's computations (stages 1–5); no file output here.
+//! The paper's whole workflow (Civera et al. 2021, §2–§4) on a virtual
+//! high-aspect-ratio wing, as one computation with typed settings and a
+//! typed result ([`Demo::run_all`]); rendering its report is the caller's
+//! (the `nlsdof demo` command writes figures, tables and `report.md`).
+//!
+//! Stages:
+//! 1. **rig** — the true unloaded and sensor-loaded wings (Table 3 linear
+//!    part, Table 7 pre-estimated nonlinear part) tested by the virtual
+//!    stepped-sine rig ([`crate::stepped_sine`]) at the five levels of
+//!    Table 2 over 5.3–5.5 Hz, plus seeded measurement noise;
+//! 2. **linear** — linear identification from a simulated low-level chirp
+//!    (4.5–6 Hz, +0.005 Hz/s): Welch H1, fast relaxed vector fitting
+//!    ([`crate::vector_fitting::identify_sdof`]);
+//! 3. **fits** — Eq 31 fits of the classic, Duffing-generalised and
+//!    generalised models (integer and real exponents) with the linear part
+//!    fixed from stage 2, plus the generalised model with everything free
+//!    (real exponents by the staged [`crate::identification::identify()`]);
+//! 4. **time** — full-length time simulation of the stepped-sine test, true
+//!    model + noise ("measured") vs the fitted generalised integer model;
+//! 5. **spectrograms** — STFT and Eq 33 (and its robust variant), Fig 8.
+//!
+//! Deterministic for a seed (independent jobs run in parallel on rayon).
 
-use crate::error::CliError;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use nlsdof::excitation::{Dwell, LinearChirp, SteppedSine};
-use nlsdof::identification::global::SplitMix64;
-use nlsdof::identification::models::{ETA, RHO};
-use nlsdof::identification::objective::evaluate;
-use nlsdof::identification::{
+pub mod spectra;
+
+use crate::excitation::{Dwell, LinearChirp, SteppedSine};
+use crate::identification::global::SplitMix64;
+use crate::identification::models::{ETA, RHO};
+use crate::identification::objective::evaluate;
+use crate::identification::{
     fit, integer_search, phase_quadrature_table, Dataset, FitOptions, FitResult, FitSpec,
     ModelKind, PhaseQuadratureRow, Record, Status, N_PARAMS,
 };
-use nlsdof::signal_processing::{welch_frf, Symmetry, WelchOptions, Window};
-use nlsdof::simulation::{simulate_excitation, Method, Options};
-use nlsdof::stepped_sine::{run_levels, RigOptions, RigSweep};
-use nlsdof::vector_fitting::{
-    dominant_mode, fit as vf_fit, half_power, modal_parameters, sdof_linear_part, HalfPower,
-    InputKind, LinearPart, OutputKind, VfFit, VfOptions, C64,
+use crate::signal_processing::{welch_frf, Symmetry, WelchOptions, Window};
+use crate::simulation::{simulate_excitation, Method, Options};
+use crate::stepped_sine::{run_levels, RigOptions, RigSweep};
+use crate::vector_fitting::{
+    identify_sdof, HalfPower, InputKind, LinearPart, MeasuredFrf, OutputKind, PoleCount,
+    SdofIdError, SdofIdOptions, SdofIdentification, VfFit, C64,
 };
-use nlsdof::{Model, NormalisedModel, SweepDirection};
+use crate::{Model, NormalisedModel, SweepDirection};
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
+use thiserror::Error;
 
 /// Table 2: input levels, m/s² **peak-to-peak** (the APIs take half).
 pub const LEVELS_PP: [f64; 5] = [0.82, 1.24, 1.62, 2.00, 2.46];
@@ -36,15 +59,24 @@ pub const FS_RECORD: f64 = 64.0;
 /// Integration steps per recorded sample.
 pub const SUBSTEPS: usize = 4;
 /// Relative noise of the chirp test's input and output channels (of their RMS).
-pub const CHIRP_NOISE: f64 = 0.01;
+pub(crate) const CHIRP_NOISE: f64 = 0.01;
 /// Additive amplitude noise of the rig, m.
-pub const RIG_NOISE_ABS: f64 = 5e-6;
+pub(crate) const RIG_NOISE_ABS: f64 = 5e-6;
 /// Phase noise of the rig, degrees.
-pub const RIG_NOISE_PHASE_DEG: f64 = 0.2;
+pub(crate) const RIG_NOISE_PHASE_DEG: f64 = 0.2;
 /// Noise of the recorded stepped-sine displacement, fraction of its RMS.
-pub const TIME_NOISE: f64 = 0.005;
+pub(crate) const TIME_NOISE: f64 = 0.005;
 /// Levels whose spectrograms are drawn (0-based; the paper shows 1, 3, 5).
 pub const SPECTROGRAM_LEVELS: [usize; 3] = [0, 2, 4];
+
+/// The measurement noise of the run, in words (report and `summary.json`).
+pub fn noise_model(rel: f64) -> String {
+    format!(
+        "rig amplitudes a_meas = a (1 + {rel} e1) + {RIG_NOISE_ABS} m * e2, phases phi_meas = phi + {RIG_NOISE_PHASE_DEG} deg * e3; \
+chirp input and output + {CHIRP_NOISE} x their RMS * e; recorded stepped-sine displacement + {TIME_NOISE} x its RMS * e; \
+e independent standard normal (SplitMix64 + Box-Muller, one stream per channel seeded from --seed)"
+    )
+}
 
 /// Run settings.
 #[derive(Debug, Clone)]
@@ -93,7 +125,7 @@ pub struct Config {
 }
 
 /// Table 3 (linear part) + Table 7 "pre-estimated" non-integer nonlinear part.
-pub fn configs() -> Result<Vec<Config>, CliError> {
+pub fn configs() -> Result<Vec<Config>, DemoError> {
     Ok(vec![
         Config {
             key: "unloaded",
@@ -113,12 +145,12 @@ pub fn configs() -> Result<Vec<Config>, CliError> {
 }
 
 /// θ = (α, δ, β, ρ, κ, η, gain) of a model.
-pub fn theta_of(m: &NormalisedModel) -> [f64; N_PARAMS] {
+fn theta_of(m: &NormalisedModel) -> [f64; N_PARAMS] {
     [m.alpha, m.delta, m.beta, m.rho, m.kappa, m.eta, 1.0]
 }
 
 /// Gaussian generator: SplitMix64 + Box–Muller, one stream per tag.
-pub struct Gauss {
+struct Gauss {
     rng: SplitMix64,
     spare: Option<f64>,
 }
@@ -214,7 +246,7 @@ pub struct FitEntry {
     pub pq: Vec<PhaseQuadratureRow>,
     pub seconds: f64,
     /// The staged identification behind `result` (real-exponent fits).
-    pub identification: Option<Box<nlsdof::identification::Identification>>,
+    pub identification: Option<Box<crate::identification::Identification>>,
 }
 
 /// Stage 4/5 result for one level.
@@ -243,7 +275,7 @@ pub struct ConfigRun {
     pub linear: Option<LinearId>,
     pub fits: Vec<FitEntry>,
     pub time: Vec<TimeLevel>,
-    pub spectra: Vec<super::spectra::LevelSpectra>,
+    pub spectra: Vec<spectra::LevelSpectra>,
 }
 
 pub struct Demo {
@@ -252,26 +284,41 @@ pub struct Demo {
     pub timings: Vec<(String, f64)>,
 }
 
-pub fn stage_bar(len: u64, stage: &str) -> ProgressBar {
-    let pb = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        ProgressStyle::with_template("{prefix:>11} {wide_msg} [{bar:20}] {pos}/{len} {elapsed:>4}")
-    {
-        pb.set_style(style.progress_chars("=> "));
-    }
-    pb.set_prefix(stage.to_string());
-    pb
+/// Why the demo stopped.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DemoError {
+    #[error(transparent)]
+    Parameter(#[from] crate::error::ParameterError),
+    #[error(transparent)]
+    Solve(#[from] crate::error::SolveError),
+    #[error(transparent)]
+    Simulation(#[from] crate::error::SimulationError),
+    #[error(transparent)]
+    Signal(#[from] crate::signal_processing::SignalError),
+    #[error(transparent)]
+    VectorFitting(#[from] crate::vector_fitting::IdentificationError),
+    /// A stage failed (what and why).
+    #[error("{0}")]
+    Failed(String),
 }
 
-pub fn done(pb: &ProgressBar, stage: &str, t: Instant) -> f64 {
-    let s = t.elapsed().as_secs_f64();
-    pb.finish_and_clear();
-    eprintln!("nlsdof demo: {stage:<22} {s:>6.2} s");
-    s
+/// What the demo reports while it runs (a progress bar, a log, or nothing:
+/// `&()`). Called from several threads.
+pub trait DemoProgress: Sync {
+    /// A stage begins: its label (e.g. `1/6 rig`) and number of steps.
+    fn stage(&self, _label: &str, _steps: u64) {}
+    /// What the stage is doing now.
+    fn message(&self, _message: &str) {}
+    /// One step done.
+    fn step(&self) {}
+    /// The stage (named as in [`Demo::timings`]) ended after `seconds`.
+    fn done(&self, _name: &str, _seconds: f64) {}
 }
 
-fn fit_err(what: &str) -> impl Fn(nlsdof::identification::FitError) -> CliError + '_ {
-    move |e| CliError::Usage(format!("demo: {what}: {e}"))
+impl DemoProgress for () {}
+
+fn fit_err(what: &str) -> impl Fn(crate::identification::FitError) -> DemoError + '_ {
+    move |e| DemoError::Failed(format!("demo: {what}: {e}"))
 }
 
 impl Demo {
@@ -283,7 +330,8 @@ impl Demo {
         }
     }
 
-    pub fn run_all(&mut self) -> Result<(), CliError> {
+    /// Runs stages 1–5 (see the module documentation).
+    pub fn run_all(&mut self, progress: &dyn DemoProgress) -> Result<(), DemoError> {
         for cfg in configs()? {
             let truth_theta = theta_of(&cfg.truth.normalised()?);
             self.runs.push(ConfigRun {
@@ -297,38 +345,39 @@ impl Demo {
             });
         }
         let t = Instant::now();
-        self.stage_rig()?;
+        self.stage_rig(progress)?;
         self.timings
             .push(("stepped-sine rig".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        self.stage_linear()?;
+        self.stage_linear(progress)?;
         self.timings
             .push(("linear identification".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        self.stage_fits()?;
+        self.stage_fits(progress)?;
         self.timings
             .push(("nonlinear fits".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        self.stage_time()?;
+        self.stage_time(progress)?;
         self.timings
             .push(("time simulation".into(), t.elapsed().as_secs_f64()));
         let t = Instant::now();
-        super::spectra::stage_spectra(self)?;
+        self.stage_spectra(progress)?;
         self.timings
             .push(("spectrograms".into(), t.elapsed().as_secs_f64()));
         Ok(())
     }
 
     /// Stage 1: the virtual stepped-sine rig plus measurement noise.
-    fn stage_rig(&mut self) -> Result<(), CliError> {
+    fn stage_rig(&mut self, progress: &dyn DemoProgress) -> Result<(), DemoError> {
         let s = self.settings.clone();
         let gammas = s.gammas();
         let omegas = s.omegas();
         let total = (self.runs.len() * gammas.len() * omegas.len()) as u64;
-        let pb = stage_bar(total, "1/6 rig");
+        let pb = progress;
+        pb.stage("1/6 rig", total);
         let t = Instant::now();
         for run in &mut self.runs {
-            pb.set_message(format!("{}: 5 levels x {} steps", run.cfg.key, s.steps));
+            pb.message(&format!("{}: 5 levels x {} steps", run.cfg.key, s.steps));
             let model = run.cfg.truth.normalised()?;
             let sweeps = run_levels(
                 &model,
@@ -336,7 +385,7 @@ impl Demo {
                 &omegas,
                 SweepDirection::Up,
                 &RigOptions::default(),
-                &|| pb.inc(1),
+                &|| pb.step(),
             )?;
             let mut records = Vec::new();
             let (mut noise2, mut n) = (0.0, 0usize);
@@ -360,7 +409,7 @@ impl Demo {
                 }
             }
             let data = Dataset::from_records(&records)
-                .map_err(|e| CliError::Usage(format!("demo: rig data: {e}")))?;
+                .map_err(|e| DemoError::Failed(format!("demo: rig data: {e}")))?;
             let truth_cost = evaluate(&data, &run.truth_theta, false)?.cost();
             let truth_pq = phase_quadrature_table(&data, &run.truth_theta)?;
             run.measured = Some(Measured {
@@ -372,39 +421,41 @@ impl Demo {
                 truth_pq,
             });
         }
-        done(&pb, "stepped-sine rig", t);
+        pb.done("stepped-sine rig", t.elapsed().as_secs_f64());
         Ok(())
     }
 
     /// Stage 2: chirp test, Welch H1, vector fitting.
-    fn stage_linear(&mut self) -> Result<(), CliError> {
+    fn stage_linear(&mut self, progress: &dyn DemoProgress) -> Result<(), DemoError> {
         let s = self.settings.clone();
-        let pb = stage_bar(self.runs.len() as u64, "2/6 linear");
+        let pb = progress;
+        pb.stage("2/6 linear", self.runs.len() as u64);
         let t = Instant::now();
         for run in &mut self.runs {
-            pb.set_message(format!("{}: chirp, H1, vector fitting", run.cfg.key));
+            pb.message(&format!("{}: chirp, H1, vector fitting", run.cfg.key));
             run.linear = Some(linear_id(&run.cfg, s.seed)?);
-            pb.inc(1);
+            pb.step();
         }
-        done(&pb, "linear identification", t);
+        pb.done("linear identification", t.elapsed().as_secs_f64());
         Ok(())
     }
 
     /// Stage 3: the fits.
-    fn stage_fits(&mut self) -> Result<(), CliError> {
+    fn stage_fits(&mut self, progress: &dyn DemoProgress) -> Result<(), DemoError> {
         let s = self.settings.clone();
         let per_config = 8u64;
-        let pb = stage_bar(per_config * self.runs.len() as u64, "3/6 fits");
+        let pb = progress;
+        pb.stage("3/6 fits", per_config * self.runs.len() as u64);
         let t = Instant::now();
         for run in &mut self.runs {
             let data = &run.measured.as_ref().expect("stage 1 ran").data;
             let lin = run.linear.as_ref().expect("stage 2 ran");
             let key = run.cfg.key;
-            let spec_fixed = |kind: ModelKind| -> Result<FitSpec, CliError> {
+            let spec_fixed = |kind: ModelKind| -> Result<FitSpec, DemoError> {
                 let mut spec = FitSpec::new(kind, data);
                 spec.fix("alpha", lin.part.alpha)
                     .and_then(|_| spec.fix("delta", lin.part.delta))
-                    .map_err(|e| CliError::Usage(format!("demo: {e}")))?;
+                    .map_err(|e| DemoError::Failed(format!("demo: {e}")))?;
                 Ok(spec)
             };
             let opts = FitOptions {
@@ -418,13 +469,13 @@ impl Demo {
                             paper: &'static str,
                             spec: FitSpec,
                             linear: Linear|
-             -> Result<FitEntry, CliError> {
-                pb.set_message(format!("{key}: {label}"));
+             -> Result<FitEntry, DemoError> {
+                pb.message(&format!("{key}: {label}"));
                 let t = Instant::now();
                 let staged = staged_fit(data, &spec, &opts)
-                    .map_err(|e| CliError::Usage(format!("demo: fit '{label}' failed: {e}")))?;
+                    .map_err(|e| DemoError::Failed(format!("demo: fit '{label}' failed: {e}")))?;
                 let r = staged.fit.clone();
-                pb.inc(1);
+                pb.step();
                 Ok(FitEntry {
                     id,
                     label,
@@ -472,8 +523,8 @@ impl Demo {
                            label: &'static str,
                            paper: &'static str,
                            from: &FitEntry|
-             -> Result<FitEntry, CliError> {
-                pb.set_message(format!("{key}: {label}"));
+             -> Result<FitEntry, DemoError> {
+                pb.message(&format!("{key}: {label}"));
                 let t = Instant::now();
                 let mut spec = spec_fixed(from.kind)?;
                 for j in [RHO, ETA] {
@@ -484,7 +535,7 @@ impl Demo {
                         let name = if j == RHO { "rho" } else { "eta" };
                         // bounds must satisfy min < max: widen by a hair around one integer
                         spec.set_bounds(name, lo - 0.25, hi + 0.25)
-                            .map_err(|e| CliError::Usage(format!("demo: {e}")))?;
+                            .map_err(|e| DemoError::Failed(format!("demo: {e}")))?;
                     }
                 }
                 let cands = integer_search(
@@ -510,11 +561,11 @@ impl Demo {
                     }
                 }
                 let best = best.ok_or_else(|| {
-                    CliError::Usage(format!(
+                    DemoError::Failed(format!(
                         "demo: {label}: no integer exponent could be fitted"
                     ))
                 })?;
-                pb.inc(1);
+                pb.step();
                 Ok(FitEntry {
                     id,
                     label,
@@ -557,7 +608,7 @@ impl Demo {
                     [3, 4],
                 ),
             ] {
-                pb.set_message(format!("{key}: {label}"));
+                pb.message(&format!("{key}: {label}"));
                 let t = Instant::now();
                 let part = Dataset {
                     curves: levels.iter().map(|&i| data.curves[i].clone()).collect(),
@@ -565,10 +616,10 @@ impl Demo {
                 let mut spec = FitSpec::new(ModelKind::DuffingQuadratic, &part);
                 spec.fix("alpha", lin.part.alpha)
                     .and_then(|_| spec.fix("delta", lin.part.delta))
-                    .map_err(|e| CliError::Usage(format!("demo: {e}")))?;
+                    .map_err(|e| DemoError::Failed(format!("demo: {e}")))?;
                 let r = fit(&part, &spec, &opts, &|| {}).map_err(fit_err(label))?;
                 let result = judge_on_all(data, r)?;
-                pb.inc(1);
+                pb.step();
                 fits.push(FitEntry {
                     id,
                     label,
@@ -586,12 +637,38 @@ impl Demo {
             fits.extend([dg_int, dg_real, g_int, g_real, g_free]);
             run.fits = fits;
         }
-        done(&pb, "nonlinear fits", t);
+        pb.done("nonlinear fits", t.elapsed().as_secs_f64());
+        Ok(())
+    }
+
+    /// Stage 5: STFT spectrograms of the recorded and simulated responses
+    /// and their Eq 33 comparison.
+    fn stage_spectra(&mut self, progress: &dyn DemoProgress) -> Result<(), DemoError> {
+        let total: usize = self.runs.iter().map(|r| r.time.len()).sum();
+        let pb = progress;
+        pb.stage("5/6 spectra", total as u64);
+        let t = Instant::now();
+        for run in &mut self.runs {
+            pb.message(&format!("{}: STFT, Eq 33", run.cfg.key));
+            let mut out = Vec::new();
+            for tl in &run.time {
+                out.push(spectra::level_spectra(
+                    tl.level,
+                    &tl.measured,
+                    &tl.model,
+                    FS_RECORD,
+                    SPECTROGRAM_LEVELS.contains(&tl.level),
+                )?);
+                pb.step();
+            }
+            run.spectra = out;
+        }
+        pb.done("spectrograms", t.elapsed().as_secs_f64());
         Ok(())
     }
 
     /// Stage 4: full-length time simulation of the stepped-sine test.
-    fn stage_time(&mut self) -> Result<(), CliError> {
+    fn stage_time(&mut self, progress: &dyn DemoProgress) -> Result<(), DemoError> {
         let s = self.settings.clone();
         let mut jobs = Vec::new();
         for (ci, run) in self.runs.iter().enumerate() {
@@ -609,42 +686,30 @@ impl Demo {
                     dwell: (m.mean_dwell(li) * s.dwell_factor).max(1.0),
                     truth: run.cfg.truth.normalised()?,
                     model: fitted.result.model(),
-                    gain: fitted.result.theta[nlsdof::identification::models::GAIN],
+                    gain: fitted.result.theta[crate::identification::models::GAIN],
                     seed: s.seed,
                     key: run.cfg.key,
                 });
             }
         }
-        let pb = stage_bar(jobs.len() as u64, "4/6 time");
-        pb.set_message("stepped sine, true model + noise vs fitted");
+        let pb = progress;
+        pb.stage("4/6 time", jobs.len() as u64);
+        pb.message("stepped sine, true model + noise vs fitted");
         let t = Instant::now();
         let omegas = s.omegas();
-        let next = std::sync::atomic::AtomicUsize::new(0);
-        let results: std::sync::Mutex<Vec<Option<Result<TimeLevel, CliError>>>> =
-            std::sync::Mutex::new((0..jobs.len()).map(|_| None).collect());
-        let threads = std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .clamp(1, 4);
-        std::thread::scope(|sc| {
-            for _ in 0..threads {
-                sc.spawn(|| loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    if k >= jobs.len() {
-                        break;
-                    }
-                    let r = time_level(&jobs[k], &omegas);
-                    pb.inc(1);
-                    results.lock().expect("no panic while locked")[k] = Some(r);
-                });
-            }
-        });
-        let results = results.into_inner().expect("no panic while locked");
+        let results: Vec<Result<TimeLevel, DemoError>> = jobs
+            .par_iter()
+            .map(|job| {
+                let r = time_level(job, &omegas);
+                pb.step();
+                r
+            })
+            .collect();
         for (job, r) in jobs.iter().zip(results) {
-            let r = r.expect("every job ran")?;
+            let r = r?;
             self.runs[job.config].time.push(r);
         }
-        done(&pb, "time simulation", t);
+        pb.done("time simulation", t.elapsed().as_secs_f64());
         Ok(())
     }
 }
@@ -652,7 +717,7 @@ impl Demo {
 /// A fit made on part of the data, re-evaluated on all of it: cost, points,
 /// model amplitudes and per-level statistics over every level (the
 /// parameters and their intervals stay those of the partial fit).
-fn judge_on_all(data: &Dataset, mut r: FitResult) -> Result<FitResult, CliError> {
+fn judge_on_all(data: &Dataset, mut r: FitResult) -> Result<FitResult, DemoError> {
     let e = evaluate(data, &r.theta, false)?;
     r.cost = e.cost();
     r.n_points = data.len();
@@ -666,7 +731,7 @@ fn judge_on_all(data: &Dataset, mut r: FitResult) -> Result<FitResult, CliError>
             s += d * d;
             sn += (d / c.gamma).powi(2);
         }
-        levels.push(nlsdof::identification::LevelStats {
+        levels.push(crate::identification::LevelStats {
             level: c.level.clone(),
             gamma: c.gamma,
             direction: c.direction,
@@ -688,7 +753,7 @@ struct ChirpThenSilence {
     end: f64,
 }
 
-impl nlsdof::excitation::Excitation for ChirpThenSilence {
+impl crate::excitation::Excitation for ChirpThenSilence {
     fn accel(&self, t: f64) -> f64 {
         if t <= self.end {
             self.chirp.accel(t)
@@ -702,7 +767,7 @@ impl nlsdof::excitation::Excitation for ChirpThenSilence {
 pub const CHIRP_TAIL_S: f64 = 40.0;
 
 /// Welch H1 restricted to the chirp band.
-fn h1_in_band(u: &[f64], x: &[f64], opts: &WelchOptions) -> Result<BandH1, CliError> {
+fn h1_in_band(u: &[f64], x: &[f64], opts: &WelchOptions) -> Result<BandH1, DemoError> {
     let est = welch_frf(FS_RECORD, u, x, opts)?;
     let keep: Vec<usize> = (0..est.frequency_hz.len())
         .filter(|&k| est.frequency_hz[k] >= CHIRP_F0 && est.frequency_hz[k] <= CHIRP_F1)
@@ -715,30 +780,25 @@ fn h1_in_band(u: &[f64], x: &[f64], opts: &WelchOptions) -> Result<BandH1, CliEr
     ))
 }
 
-fn vf_sdof(f_hz: &[f64], h1: &[C64], mass: f64) -> Result<(VfFit, LinearPart), CliError> {
-    let omega: Vec<f64> = f_hz.iter().map(|f| TAU * f).collect();
-    let fit = vf_fit(
-        &omega,
-        h1,
-        &VfOptions {
-            pole_pairs: 1,
-            constant: true,
-            ..VfOptions::default()
-        },
-    )?;
-    let modes = modal_parameters(&fit);
-    let mode = modes[dominant_mode(&modes)?];
-    let part = sdof_linear_part(
-        &mode,
-        InputKind::Acceleration,
-        OutputKind::Displacement,
-        Some(mass),
-    )?;
-    Ok((fit, part))
+/// The SDoF linear part of a base-acceleration to displacement FRF with a
+/// known mass: vector fitting with one pole pair, and the half-power check.
+fn vf_sdof(f_hz: &[f64], h1: &[C64], mass: f64) -> Result<SdofIdentification, DemoError> {
+    let frf = MeasuredFrf::complex(f_hz.iter().map(|f| TAU * f).collect(), h1.to_vec());
+    let opts = SdofIdOptions {
+        poles: PoleCount::Fixed(1),
+        input: InputKind::Acceleration,
+        output: OutputKind::Displacement,
+        mass: Some(mass),
+        ..SdofIdOptions::default()
+    };
+    identify_sdof(&frf, &opts).map_err(|e| match e {
+        SdofIdError::Fit(e) => e.into(),
+        e => DemoError::Failed(format!("demo: linear identification: {e}")),
+    })
 }
 
 /// Chirp test of one configuration and its linear identification.
-fn linear_id(cfg: &Config, seed: u64) -> Result<LinearId, CliError> {
+fn linear_id(cfg: &Config, seed: u64) -> Result<LinearId, DemoError> {
     let model = cfg.truth.normalised()?;
     let sweep_s = (CHIRP_F1 - CHIRP_F0) / CHIRP_RATE; // 300 s
     let exc = ChirpThenSilence {
@@ -790,7 +850,7 @@ fn linear_id(cfg: &Config, seed: u64) -> Result<LinearId, CliError> {
             detrend_mean: true,
         },
     )?;
-    let (fit, part) = vf_sdof(&f_hz, &h1, cfg.truth.mass)?;
+    let id = vf_sdof(&f_hz, &h1, cfg.truth.mass)?;
     // For comparison: the textbook Welch set-up (Hann, 3 segments of half
     // the record, 50 % overlap). The window changes appreciably within the
     // ~4.6 s decay time of the resonance, which biases the damping.
@@ -808,20 +868,18 @@ fn linear_id(cfg: &Config, seed: u64) -> Result<LinearId, CliError> {
     )?;
     let hann = vf_sdof(&hf, &hh, cfg.truth.mass)
         .ok()
-        .map(|(_, p)| (p, hav, segment));
-    let omega: Vec<f64> = f_hz.iter().map(|f| TAU * f).collect();
-    // half-power on the mobility |H| ω (a check beside vector fitting)
-    let mob: Vec<f64> = omega.iter().zip(&h1).map(|(w, h)| h.norm() * w).collect();
-    let hp = half_power(&omega, &mob).ok();
+        .and_then(|id| id.linear)
+        .map(|p| (p, hav, segment));
     Ok(LinearId {
         f_hz,
         h1,
         averages,
         segment: u.len(),
         samples: u.len(),
-        fit,
-        part,
-        half_power: hp,
+        // half-power on the mobility |H| ω: a check beside vector fitting
+        half_power: id.half_power.ok(),
+        part: id.linear.expect("a complex FRF is vector fitted"),
+        fit: id.fit.expect("a complex FRF is vector fitted"),
         hann,
     })
 }
@@ -842,7 +900,7 @@ fn simulate_stepped(
     model: &NormalisedModel,
     exc: &SteppedSine,
     n_rec: usize,
-) -> Result<Vec<f64>, CliError> {
+) -> Result<Vec<f64>, DemoError> {
     let mut x = Vec::with_capacity(n_rec);
     simulate_excitation(
         model,
@@ -862,7 +920,7 @@ fn simulate_stepped(
     Ok(x)
 }
 
-fn time_level(job: &TimeJob, omegas: &[f64]) -> Result<TimeLevel, CliError> {
+fn time_level(job: &TimeJob, omegas: &[f64]) -> Result<TimeLevel, DemoError> {
     let exc = SteppedSine::new(job.gamma, omegas.to_vec(), Dwell::Seconds(job.dwell))?;
     let exc_model = SteppedSine::new(
         job.gamma * job.gain,
@@ -911,7 +969,7 @@ fn time_level(job: &TimeJob, omegas: &[f64]) -> Result<TimeLevel, CliError> {
     })
 }
 
-/// The staged identification ([`nlsdof::identification::identify`]:
+/// The staged identification ([`crate::identification::identify`]:
 /// equation error, exponent landscape, output error) with the structure of
 /// `spec`: its held coefficients and exponents, the gain held at its value
 /// (the paper fixes it), the stiffness sign from the data.
@@ -919,9 +977,9 @@ fn staged_fit(
     data: &Dataset,
     spec: &FitSpec,
     opts: &FitOptions,
-) -> Result<nlsdof::identification::Identification, nlsdof::identification::IdentifyError> {
-    use nlsdof::identification::models::{Term, ALPHA, BETA, DELTA, GAIN, KAPPA};
-    use nlsdof::identification::{FitPlan, GainChoice, PARAM_NAMES};
+) -> Result<crate::identification::Identification, crate::identification::IdentifyError> {
+    use crate::identification::models::{Term, ALPHA, BETA, DELTA, GAIN, KAPPA};
+    use crate::identification::{FitPlan, GainChoice, PARAM_NAMES};
     let mut plan = FitPlan::new(spec.kind);
     for j in [ALPHA, DELTA, BETA, KAPPA] {
         if let Status::Fixed(v) = spec.status[j] {
@@ -941,6 +999,6 @@ fn staged_fit(
     // The demo reproduces the paper's Eq 31 (absolute residuals): its rig
     // noise has an absolute part, and the report compares every fit's Eq 31
     // cost with the truth's.
-    plan.weighting = nlsdof::identification::Weighting::Absolute;
-    nlsdof::identification::identify(data, &plan, &|| {})
+    plan.weighting = crate::identification::Weighting::Absolute;
+    crate::identification::identify(data, &plan, &|| {})
 }

@@ -891,6 +891,20 @@ pub fn solve_magnitude(
     eta: f64,
     warm: Option<&[f64]>,
 ) -> Result<(EquationErrorFit, Vec<f64>), EquationErrorError> {
+    solve_magnitude_to(prep, terms, rho, eta, warm, 1e-13, 1e-15)
+}
+
+/// [`solve_magnitude`] to the step and cost tolerances `xtol`, `ftol` of
+/// the LM (the landscape maps the cost to ~1e-10, not to the last digit).
+pub(crate) fn solve_magnitude_to(
+    prep: &Prepared,
+    terms: Terms,
+    rho: f64,
+    eta: f64,
+    warm: Option<&[f64]>,
+    xtol: f64,
+    ftol: f64,
+) -> Result<(EquationErrorFit, Vec<f64>), EquationErrorError> {
     let sc = prep.scales;
     let reg: Vec<(f64, f64)> = prep
         .points
@@ -915,9 +929,9 @@ pub fn solve_magnitude(
     let opts = LmOptions {
         max_iterations: 200,
         max_evaluations: 600,
-        xtol: 1e-13,
-        ftol: 1e-15,
-        gtol: 1e-13,
+        xtol,
+        ftol,
+        gtol: xtol,
         cost_floor: 1e-28 * prep.points.len() as f64,
     };
     let mut best: Option<super::levenberg_marquardt::LmResult> = None;

@@ -22,8 +22,8 @@
 //! that reaches the grid edge is reported open on that side.
 
 use super::equation_error::{
-    solve_magnitude, solve_phase, EquationErrorError, EquationErrorFit, PhaseConvention, Prepared,
-    Terms,
+    solve_magnitude_to, solve_phase, EquationErrorError, EquationErrorFit, PhaseConvention,
+    Prepared, Terms,
 };
 use rayon::prelude::*;
 
@@ -140,8 +140,13 @@ pub fn landscape(
             rv.iter()
                 .map(|&r| match phase {
                     LandscapePhase::Ignore => {
-                        let res = solve_magnitude(prep, terms, r, e, warm.as_deref())
-                            .or_else(|_| solve_magnitude(prep, terms, r, e, None));
+                        // LM tolerances of a map: measured on 5 × 200 noisy
+                        // points, the costs agree with those solved to
+                        // (1e-13, 1e-15) to 3e-12 relative, the minima and the
+                        // profile interval to 1e-10, at 2.7 times the speed
+                        let (xt, ft) = (1e-6, 1e-8);
+                        let res = solve_magnitude_to(prep, terms, r, e, warm.as_deref(), xt, ft)
+                            .or_else(|_| solve_magnitude_to(prep, terms, r, e, None, xt, ft));
                         // keep the better of warm and cold at the first node of a row
                         match res {
                             Ok((fit, u)) => {

@@ -194,25 +194,35 @@ fn suite(seeds: std::ops::Range<u64>, weighting: Weighting) -> Tally {
     }
 }
 
-#[test]
-fn synthetic_suite_ci_subset() {
-    let t = suite(0..24, Weighting::default());
+/// Runs the first 24 cases with `weighting` and asserts the floors
+/// `(efficient, consistent, strict)`; every case must be fitted.
+fn ci_subset(weighting: Weighting, floors: (usize, usize, usize)) {
+    let t = suite(0..24, weighting);
     let n = t.n;
-    // Measured (docs/identification.md), default (absolute, Eq 31)
-    // weights: the fit reaches the data's optimum (alpha, delta, curves) on
-    // all 24 and is within 2.58 CRLB sd of the true exponents on 23; the
-    // issue's exponent criterion (within 0.1) holds on 6, since at 1 %
-    // noise the data of 22 of these 24 cases do not pin both exponents to
-    // 0.1 (1.96 CRLB sd > 0.1). Floors guard against regressions; the
-    // issue's 97 % is asserted by the full suites.
     println!(
-        "strict {}/{n}, consistent {}/{n}, efficient {}/{n}, fitted {}/{n}",
+        "{weighting:?}: strict {}/{n}, consistent {}/{n}, efficient {}/{n}, fitted {}/{n}",
         t.passed, t.consistent, t.efficient, t.fitted
     );
     assert_eq!(t.fitted, n, "{} of {n} fitted", t.fitted);
-    assert!(t.efficient >= 23, "{} of {n} efficient", t.efficient);
-    assert!(t.consistent >= 19, "{} of {n} consistent", t.consistent);
-    assert!(t.passed >= 6, "{} of {n} strict", t.passed);
+    assert!(t.efficient >= floors.0, "{} of {n} efficient", t.efficient);
+    assert!(
+        t.consistent >= floors.1,
+        "{} of {n} consistent",
+        t.consistent
+    );
+    assert!(t.passed >= floors.2, "{} of {n} strict", t.passed);
+}
+
+/// Measured (docs/identification.md), default (absolute, Eq 31) weights:
+/// the fit reaches the data's optimum (alpha, delta, curves) on all 24 and
+/// is within 2.58 CRLB sd of the true exponents on 23; the exponent
+/// criterion (within 0.1) holds on 6, since at 1 % noise the data of 22 of
+/// these 24 cases do not pin both exponents to 0.1 (1.96 CRLB sd > 0.1).
+/// The floors guard against regressions; the 97 % is asserted by
+/// the full suites.
+#[test]
+fn synthetic_suite_ci_subset() {
+    ci_subset(Weighting::default(), (23, 19, 6));
 }
 
 /// Relative weights, the maximum-likelihood choice for the generator's
@@ -220,16 +230,7 @@ fn synthetic_suite_ci_subset() {
 /// 23 of 24 consistent, against 19 with the default weights).
 #[test]
 fn synthetic_suite_ci_subset_relative() {
-    let t = suite(0..24, Weighting::Relative);
-    let n = t.n;
-    println!(
-        "relative: strict {}/{n}, consistent {}/{n}, efficient {}/{n}, fitted {}/{n}",
-        t.passed, t.consistent, t.efficient, t.fitted
-    );
-    assert_eq!(t.fitted, n, "{} of {n} fitted", t.fitted);
-    assert!(t.efficient >= 23, "{} of {n} efficient", t.efficient);
-    assert!(t.consistent >= 22, "{} of {n} consistent", t.consistent);
-    assert!(t.passed >= 8, "{} of {n} strict", t.passed);
+    ci_subset(Weighting::Relative, (23, 22, 8));
 }
 
 #[test]

@@ -647,7 +647,17 @@ struct Magnitude<'a> {
     reg: Vec<(f64, f64)>,
 }
 
-impl Magnitude<'_> {
+impl<'a> Magnitude<'a> {
+    fn new(prep: &'a Prepared, terms: Terms, rho: f64, eta: f64) -> Self {
+        let sc = prep.scales;
+        let reg = prep
+            .points
+            .iter()
+            .map(|p| regressors(p, rho, eta, &sc))
+            .collect();
+        Self { prep, terms, reg }
+    }
+
     fn unpack(&self, x: &[f64]) -> (f64, f64, f64, f64, f64) {
         let mut q = 0;
         let mut next = |present: bool| {
@@ -866,16 +876,10 @@ pub fn solve_magnitude_lifted(
     rho: f64,
     eta: f64,
 ) -> Option<[f64; N_PARAMS]> {
-    let sc = prep.scales;
-    let reg: Vec<(f64, f64)> = prep
-        .points
-        .iter()
-        .map(|p| regressors(p, rho, eta, &sc))
-        .collect();
-    let x = magnitude_lifted_start(prep, terms, &reg)?;
-    let prob = Magnitude { prep, terms, reg };
+    let prob = Magnitude::new(prep, terms, rho, eta);
+    let x = magnitude_lifted_start(prep, terms, &prob.reg)?;
     let (al, be, de, ka, g) = prob.unpack(&x);
-    Some(natural(&sc, rho, eta, al, be, de, ka, g))
+    Some(natural(&prep.scales, rho, eta, al, be, de, ka, g))
 }
 
 /// Equation-error fit **without phase** at fixed exponents (bounded LM on
@@ -906,12 +910,7 @@ pub(crate) fn solve_magnitude_to(
     ftol: f64,
 ) -> Result<(EquationErrorFit, Vec<f64>), EquationErrorError> {
     let sc = prep.scales;
-    let reg: Vec<(f64, f64)> = prep
-        .points
-        .iter()
-        .map(|p| regressors(p, rho, eta, &sc))
-        .collect();
-    let prob = Magnitude { prep, terms, reg };
+    let prob = Magnitude::new(prep, terms, rho, eta);
     let n = prob.n_params();
     let inf = f64::INFINITY;
     let mut lo = vec![1e-12; n];

@@ -721,27 +721,7 @@ fn judge_on_all(data: &Dataset, mut r: FitResult) -> Result<FitResult, DemoError
     let e = evaluate(data, &r.theta, false)?;
     r.cost = e.cost();
     r.n_points = data.len();
-    let mut levels = Vec::new();
-    let mut off = 0;
-    for c in &data.curves {
-        let n = c.omegas.len();
-        let (mut s, mut sn) = (0.0, 0.0);
-        for i in 0..n {
-            let d = e.model[off + i] - c.amplitudes[i];
-            s += d * d;
-            sn += (d / c.gamma).powi(2);
-        }
-        levels.push(crate::identification::LevelStats {
-            level: c.level.clone(),
-            gamma: c.gamma,
-            direction: c.direction,
-            points: n,
-            rms: (s / n as f64).sqrt(),
-            rms_normalised: (sn / n as f64).sqrt(),
-        });
-        off += n;
-    }
-    r.levels = levels;
+    r.levels = crate::identification::level_stats(data, &e.model);
     r.model_amplitudes = e.model;
     Ok(r)
 }

@@ -314,6 +314,33 @@ fn fit_impl(
 /// (Used for the fit's own data, and to judge a fit made on a subsample on
 /// all points.)
 #[allow(clippy::too_many_arguments)]
+
+/// Per-curve RMS of `a_model − a_meas` (m) and of it over γ, for the model
+/// amplitudes `model` in data order.
+pub fn level_stats(data: &Dataset, model: &[f64]) -> Vec<LevelStats> {
+    let mut levels = Vec::with_capacity(data.curves.len());
+    let mut off = 0;
+    for c in &data.curves {
+        let n = c.omegas.len();
+        let (mut s, mut sn) = (0.0, 0.0);
+        for i in 0..n {
+            let d = model[off + i] - c.amplitudes[i];
+            s += d * d;
+            sn += (d / c.gamma).powi(2);
+        }
+        levels.push(LevelStats {
+            level: c.level.clone(),
+            gamma: c.gamma,
+            direction: c.direction,
+            points: n,
+            rms: (s / n as f64).sqrt(),
+            rms_normalised: (sn / n as f64).sqrt(),
+        });
+        off += n;
+    }
+    levels
+}
+
 pub(crate) fn assess(
     data: &Dataset,
     spec: &FitSpec,
@@ -332,26 +359,7 @@ pub(crate) fn assess(
     let phase_cost = spec
         .phase_weight
         .map(|_| e.residuals[n_amp..].iter().map(|r| r * r).sum::<f64>());
-    let mut levels = Vec::new();
-    let mut off = 0;
-    for c in &data.curves {
-        let n = c.omegas.len();
-        let (mut s, mut sn) = (0.0, 0.0);
-        for i in 0..n {
-            let d = e.model[off + i] - c.amplitudes[i];
-            s += d * d;
-            sn += (d / c.gamma).powi(2);
-        }
-        levels.push(LevelStats {
-            level: c.level.clone(),
-            gamma: c.gamma,
-            direction: c.direction,
-            points: n,
-            rms: (s / n as f64).sqrt(),
-            rms_normalised: (sn / n as f64).sqrt(),
-        });
-        off += n;
-    }
+    let levels = level_stats(data, &e.model);
     let amplitude_cost: f64 = e.residuals[..n_amp].iter().map(|r| r * r).sum();
     Ok(FitResult {
         kind: spec.kind,

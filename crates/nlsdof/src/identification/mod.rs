@@ -23,6 +23,7 @@ pub mod levenberg_marquardt;
 pub mod models;
 pub mod objective;
 pub mod phase_resonance;
+pub mod time_domain;
 pub mod uncertainty;
 
 pub use data::{Curve, DataError, Dataset, Record};

@@ -23,6 +23,10 @@ pub enum CliError {
     SignalProcessing(#[from] nlsdof::signal_processing::SignalError),
     #[error(transparent)]
     FrfFile(#[from] nlsdof_io::frf_file::FrfFileError),
+    #[error(transparent)]
+    Table(#[from] nlsdof_io::table_file::TableError),
+    #[error(transparent)]
+    TimeFit(#[from] nlsdof::identification::time_domain::TimeFitError),
     /// A bad command-line value: what was given and what is allowed.
     #[error("{0}")]
     Usage(String),

@@ -3,6 +3,7 @@ pub mod compare;
 pub mod demo;
 pub mod equiv;
 pub mod fit;
+pub mod fit_time;
 pub mod frf;
 pub mod frf_estimate;
 pub mod frf_mhb;

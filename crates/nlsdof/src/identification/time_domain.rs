@@ -935,16 +935,6 @@ fn local_fit(
         })
         .unzip();
     let r = minimise(&problem, &z0, &lo, &hi, lm).map_err(|_| TimeFitError::StartNotEvaluable)?;
-    if std::env::var_os("NLSDOF_TD_DEBUG").is_some() {
-        let c0: f64 = problem
-            .residuals(&z0)
-            .map(|r| r.iter().map(|v| v * v).sum())
-            .unwrap_or(f64::NAN);
-        eprintln!(
-            "local_fit free {free:?} scale {scale:?} cost {c0:e} -> {:e}, {} its {} evals, {}",
-            r.cost, r.iterations, r.evaluations, r.termination
-        );
-    }
     Ok(Local {
         theta: problem.theta(&r.u),
         cost: r.cost,

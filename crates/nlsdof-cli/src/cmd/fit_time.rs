@@ -5,7 +5,7 @@
 use crate::error::CliError;
 use nlsdof::identification::time_domain::{
     check_ranges, fit, predict, uniform_fs, Prediction, Record, SampleRange, TimeFitOptions,
-    INIT_WINDOW, TIME_PARAM_NAMES,
+    INIT_WINDOW, MAX_EXPONENT, TIME_PARAM_NAMES,
 };
 use nlsdof::identification::ModelKind;
 use nlsdof_io::model_file::{model_to_toml, signal_to_toml, SignalMap};
@@ -54,6 +54,9 @@ pub struct Args {
     /// Starts of the free-exponent stage (1 = from rho = 2, eta = 1; more add seeded random exponents).
     #[arg(long, default_value_t = 1)]
     pub starts: usize,
+    /// Levenberg-Marquardt iteration limit of each stage.
+    #[arg(long, value_name = "N", default_value_t = 400)]
+    pub max_iterations: usize,
     /// Seed of the extra starts.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -115,6 +118,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if kind == ModelKind::Coulomb {
         return Err(CliError::Usage(
             "--model coulomb is not supported by fit-time (eta = -1 < 0: the sensitivity equations are singular at v = 0)".into(),
+        ));
+    }
+    if a.max_iterations == 0 {
+        return Err(CliError::Usage(
+            "--max-iterations 0: give at least 1".into(),
         ));
     }
     if a.starts == 0 {
@@ -185,11 +193,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
     for t in &tests {
         check_ranges(u.len(), range, Some(*t))?;
     }
-    let opts = TimeFitOptions {
+    let mut opts = TimeFitOptions {
         starts: a.starts,
         seed: a.seed,
         ..TimeFitOptions::default()
     };
+    opts.lm.max_iterations = a.max_iterations;
+    opts.lm.max_evaluations = 3 * a.max_iterations;
     let t_fit = Instant::now();
     let res = crate::cmd::simulate::with_spinner("fitting", || fit(&rec, range, kind, &opts))?;
     let fit_s = t_fit.elapsed().as_secs_f64();
@@ -225,6 +235,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
         w.commit()?;
     }
     let unc = res.uncertainty.as_ref();
+    let at_bounds: Vec<&str> = res
+        .free
+        .iter()
+        .filter(|&&p| {
+            let v = res.theta[p];
+            match TIME_PARAM_NAMES[p] {
+                "delta" | "kappa" => v == 0.0,
+                "rho" | "eta" => v == 0.0 || v == MAX_EXPONENT,
+                _ => false,
+            }
+        })
+        .map(|&p| TIME_PARAM_NAMES[p])
+        .collect();
     let warning = if !res.termination.converged() {
         Some(format!("the fit did not converge ({})", res.termination))
     } else if unc.is_none() {
@@ -260,6 +283,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             "termination": res.termination.name(),
             "iterations": res.iterations,
             "warning": warning,
+            "at_bounds": at_bounds,
             "estimation": {
                 "range": [range.start, range.end],
                 "rms": res.rms,
@@ -279,6 +303,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     } else {
         if let Some(w) = &warning {
             println!("WARNING: {w}");
+        }
+        if !at_bounds.is_empty() {
+            println!(
+                "note: at a bound (its interval is not meaningful): {}",
+                at_bounds.join(", ")
+            );
         }
         println!(
             "fit-time {kind} on {} samples {}:{} at {fs} Hz: RMS output error {:.6e} (equation-error start {:.6e}), {} ({} iterations) in {:.2} s",

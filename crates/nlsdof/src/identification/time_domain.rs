@@ -709,8 +709,8 @@ impl Default for TimeFitOptions {
     fn default() -> Self {
         Self {
             lm: LmOptions {
-                max_iterations: 200,
-                max_evaluations: 600,
+                max_iterations: 400,
+                max_evaluations: 1200,
                 xtol: 1e-10,
                 ftol: 1e-12,
                 gtol: 1e-10,

@@ -8,6 +8,8 @@
 //! * [`levenberg_marquardt`] — bounded LM (the local solver).
 //! * [`global`] — seeded parallel multistart.
 //! * [`uncertainty`] — standard errors, 95 % intervals, correlations.
+//! * [`time_domain`] — output-error fit of Eq 32 to a recorded input and
+//!   output (its own parameter vector with gain, offsets, initial state).
 //!
 //! Everything is in mass-normalised parameters θ = (α, δ, β, ρ, κ, η, gain):
 //! with acceleration input only ratios to m are identifiable. The model

@@ -16,6 +16,7 @@
 //! sees the input `gain · γ` (a point on a continuous structure).
 
 pub mod data;
+pub mod decay;
 pub mod equation_error;
 pub mod global;
 pub mod identify;

@@ -7,6 +7,8 @@
 //!   columns `V1`, `V2` and an empty trailing field, which is ignored).
 //! * A column is named by its header name (case-insensitive) or by its
 //!   0-based index.
+//! * LabVIEW `.lvm` text: everything up to the second `***End_of_Header***`
+//!   line is skipped, then the tab-separated column names and rows.
 //! * Blank lines and lines starting with `#` are skipped. Every selected
 //!   field must be a finite number; errors name the file, the line and the
 //!   field. Unselected columns are not parsed (they may be empty).
@@ -73,9 +75,18 @@ pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
 pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
     let text = String::from_utf8_lossy(bytes);
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    // LabVIEW .lvm: two header blocks, each ending with ***End_of_Header***
+    let skip = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.trim_start().starts_with("***End_of_Header***"))
+        .nth(1)
+        .map(|(i, _)| i + 1)
+        .unwrap_or(0);
     let mut lines = text
         .lines()
         .enumerate()
+        .skip(skip)
         .map(|(i, l)| (i as u64 + 1, l.trim_end_matches('\r')))
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
         .peekable();
@@ -192,6 +203,13 @@ mod tests {
         assert!(e.to_string().contains("V1 (0), V2 (1)"), "{e}");
         // index of the empty trailing field is not a column
         assert!(parse_columns(text, Path::new("s.csv"), &["2"]).is_err());
+    }
+
+    #[test]
+    fn lvm_two_header_blocks() {
+        let text = b"LabVIEW Measurement\t\nX_Columns\tOne\n***End_of_Header***\t\n\nChannels\t2\n***End_of_Header***\t\t\nX_Value\tStrain_0\tComment\r\n0.000\t0.000211\t\r\n0.001\t2.1E-4\t\r\n";
+        let t = parse_columns(text, Path::new("a.lvm"), &["X_Value", "Strain_0"]).unwrap();
+        assert_eq!(t.columns, vec![vec![0.0, 0.001], vec![0.000211, 2.1e-4]]);
     }
 
     #[test]

@@ -66,7 +66,11 @@ fn duffing_backbone_matches_first_order_and_fit_recovers_it() {
     assert!((alpha - m.alpha).abs() < 5e-3 * m.alpha, "alpha {alpha}");
     assert!((rho - 2.0).abs() < 0.05, "rho {rho}");
     assert!((beta - m.beta).abs() < 0.05 * m.beta, "beta {beta}");
-    assert!(r.envelope_error < 0.02, "envelope error {}", r.envelope_error);
+    assert!(
+        r.envelope_error < 0.02,
+        "envelope error {}",
+        r.envelope_error
+    );
 }
 
 #[test]

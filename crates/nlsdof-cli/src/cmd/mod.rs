@@ -1,5 +1,6 @@
 //! One module per CLI verb.
 pub mod compare;
+pub mod decay;
 pub mod demo;
 pub mod equiv;
 pub mod fit;

@@ -485,10 +485,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
         });
     }
     let a: Vec<f64> = backbone.iter().map(|p| p.amplitude).collect();
-    let w2: Vec<f64> = backbone
-        .iter()
-        .map(|p| (TWO_PI * p.f_hz).powi(2))
-        .collect();
+    let w2: Vec<f64> = backbone.iter().map(|p| (TWO_PI * p.f_hz).powi(2)).collect();
     let stiffness = fit_power(&a, &w2, ["alpha", "beta", "rho"], false, "backbone")?;
     let wa: Vec<f64> = backbone
         .iter()

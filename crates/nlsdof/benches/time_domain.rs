@@ -61,5 +61,39 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// `decay` on 29,000 samples (a simulated Duffing free decay at 1 kHz, the
+/// size of the FRID record; target ≤ 50 ms), start found from the data.
+fn bench_decay(c: &mut Criterion) {
+    use nlsdof::identification::decay::{analyse, DecayOptions};
+    use nlsdof::identification::time_domain::{simulate_output, TimeModel};
+    use nlsdof::simulation::State;
+    let wn = 2.0 * std::f64::consts::PI * 37.0;
+    let tm = TimeModel {
+        model: nlsdof::NormalisedModel {
+            alpha: wn * wn,
+            delta: 2.0 * 0.003 * wn,
+            beta: 0.1 * wn * wn / 0.75,
+            rho: 2.0,
+            kappa: 0.0,
+            eta: 0.0,
+        },
+        gain: 0.0,
+        input_offset: 0.0,
+        output_offset: 0.0,
+    };
+    let fs = 1000.0;
+    let mut x = vec![0.0; 2000];
+    x.extend(simulate_output(&tm, &vec![0.0; 27_000], fs, State { x: 1.0, v: 0.0 }).unwrap());
+    for (k, v) in x.iter_mut().enumerate().take(2000) {
+        *v = (wn * k as f64 / fs).sin();
+    }
+    let mut g = c.benchmark_group("decay");
+    g.sample_size(20);
+    g.bench_function("decay_29000", |b| {
+        b.iter(|| analyse(&x, fs, &DecayOptions::default()).unwrap().envelope_error)
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_decay);
 criterion_main!(benches);

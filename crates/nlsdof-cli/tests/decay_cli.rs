@@ -78,7 +78,9 @@ fn bad_input_one_line_nothing_written() {
         &fig,
     );
     fails(
-        &["decay", "--input", p, "--column", "x", "--band", "30:700", "--plot", fg],
+        &[
+            "decay", "--input", p, "--column", "x", "--band", "30:700", "--plot", fg,
+        ],
         "Nyquist",
         &fig,
     );
@@ -87,9 +89,21 @@ fn bad_input_one_line_nothing_written() {
         "no column \"y\"",
         &fig,
     );
-    let uneven = write(dir.path(), "u.csv", "t,x\n0,1\n0.001,0.5\n0.003,0.2\n0.004,0.1\n");
+    let uneven = write(
+        dir.path(),
+        "u.csv",
+        "t,x\n0,1\n0.001,0.5\n0.003,0.2\n0.004,0.1\n",
+    );
     fails(
-        &["decay", "--input", uneven.to_str().unwrap(), "--column", "x", "--plot", fg],
+        &[
+            "decay",
+            "--input",
+            uneven.to_str().unwrap(),
+            "--column",
+            "x",
+            "--plot",
+            fg,
+        ],
         "not uniform",
         &fig,
     );

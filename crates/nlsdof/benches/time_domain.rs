@@ -90,7 +90,11 @@ fn bench_decay(c: &mut Criterion) {
     let mut g = c.benchmark_group("decay");
     g.sample_size(20);
     g.bench_function("decay_29000", |b| {
-        b.iter(|| analyse(&x, fs, &DecayOptions::default()).unwrap().envelope_error)
+        b.iter(|| {
+            analyse(&x, fs, &DecayOptions::default())
+                .unwrap()
+                .envelope_error
+        })
     });
     g.finish();
 }

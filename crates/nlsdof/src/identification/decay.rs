@@ -176,7 +176,7 @@ pub fn analytic_signal(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>
                 0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
             }
         };
-        *c = *c * (2.0 * w / m as f64);
+        *c *= 2.0 * w / m as f64;
     }
     planner.plan_fft_inverse(m).process(&mut buf);
     buf.truncate(n);

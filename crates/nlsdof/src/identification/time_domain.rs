@@ -49,7 +49,7 @@
 //! v = 0), `∂a/∂g = u + b_u`, `∂a/∂b_u = g`.
 //!
 //! **Exponents are restricted to ρ ≥ 0 and η ≥ 0 here** (the model allows
-//! > −3): for ρ < 0 the stiffness slope `(ρ+1) β |x|^ρ` of the sensitivity
+//! exponents above −3): for ρ < 0 the stiffness slope `(ρ+1) β |x|^ρ` of the sensitivity
 //! equations is infinite at x = 0, which every oscillation crosses, and the
 //! same holds for η < 0 at each velocity reversal; the discrete map is then
 //! not differentiable and the sensitivities are meaningless. With ρ, η ≥ 0
@@ -825,9 +825,7 @@ fn equation_error(
     let m = rhs.len();
     let mut j = Vec::with_capacity(m * ncol);
     for i in 0..m {
-        for c in 0..ncol {
-            j.push(cols[c][i] / norms[c]);
-        }
+        j.extend(cols.iter().zip(&norms).map(|(col, nc)| col[i] / nc));
     }
     let (a, g) = normal_equations(&j, &rhs, ncol);
     let sol = cholesky_solve(&a, &g, ncol).ok_or(TimeFitError::SingularStart)?;

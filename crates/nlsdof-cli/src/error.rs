@@ -25,6 +25,10 @@ pub enum CliError {
     FrfFile(#[from] nlsdof_io::frf_file::FrfFileError),
     #[error(transparent)]
     Demo(#[from] nlsdof::demo::DemoError),
+    #[error(transparent)]
+    Table(#[from] nlsdof_io::table_file::TableError),
+    #[error(transparent)]
+    TimeFit(#[from] nlsdof::identification::time_domain::TimeFitError),
     /// A bad command-line value: what was given and what is allowed.
     #[error("{0}")]
     Usage(String),

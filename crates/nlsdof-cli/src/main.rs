@@ -44,6 +44,11 @@ enum Command {
     Signal(cmd::signal::Args),
     /// Fit a power-law model to stepped-sine amplitude curves at several input levels (Eq 31).
     Fit(cmd::fit::Args),
+    /// Fit the power-law ODE to a recorded input and output in the time domain (output error, RK4 sensitivities).
+    #[command(name = "fit-time")]
+    FitTime(cmd::fit_time::Args),
+    /// Free-decay identification: Hilbert backbone, damping curve, averaged power-law fit.
+    Decay(cmd::decay::Args),
     /// Fit several models to one data set and compare them (Tables 5-8 analogue).
     Compare(cmd::compare::Args),
     /// Estimate an FRF (H1, H2 with coherence, or spectral ratio) from input/output time histories.
@@ -166,6 +171,8 @@ fn main() {
         Command::SteppedSine(a) => cmd::stepped_sine::run(a),
         Command::Signal(a) => cmd::signal::run(a),
         Command::Fit(a) => cmd::fit::run(a),
+        Command::FitTime(a) => cmd::fit_time::run(a),
+        Command::Decay(a) => cmd::decay::run(a),
         Command::Compare(a) => cmd::compare::run(a),
         Command::FrfEstimate(a) => cmd::frf_estimate::run(a),
         Command::LinearId(a) => cmd::linear_id::run(a),

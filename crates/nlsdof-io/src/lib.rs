@@ -15,6 +15,8 @@
 //!   swept-sine FRF exports, for linear identification.
 //! * [`phase_resonance_data`] — phase-resonance points (`gamma,f_hz,amplitude`
 //!   at 90° phase per level) for `nlsdof fit --phase-resonance`.
+//! * [`table_file`] — numeric columns of a delimited table chosen by name or
+//!   index (recorded input/output pairs for `nlsdof fit-time`).
 
 pub mod atomic;
 pub mod bounds_file;
@@ -26,6 +28,7 @@ pub mod model_file;
 pub mod phase_resonance_data;
 pub mod signal_file;
 pub mod stepped_sine_data;
+pub mod table_file;
 
 pub use error::IoError;
 

@@ -57,6 +57,9 @@
 //! * [`vector_fitting`] — linear identification (Section 2.3, Table 3):
 //!   fast relaxed vector fitting of a measured FRF, modal parameters, the
 //!   SDoF linear part; half-power and circle fit for comparison.
+//! * [`identification::time_domain`] — output-error fit of Eq 32 to a
+//!   recorded input and output (exact discrete RK4 sensitivities,
+//!   Levenberg–Marquardt, equation-error start), prediction on test ranges.
 //! * [`signal_processing`] — FRF estimation from time histories (Welch
 //!   H1/H2 and coherence, spectral ratio of a sweep), windows, STFT
 //!   spectrograms and their comparison.

@@ -1,8 +1,10 @@
 //! One module per CLI verb.
 pub mod compare;
+pub mod decay;
 pub mod demo;
 pub mod equiv;
 pub mod fit;
+pub mod fit_time;
 pub mod frf;
 pub mod frf_estimate;
 pub mod frf_mhb;

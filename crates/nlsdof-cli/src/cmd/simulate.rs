@@ -114,9 +114,13 @@ INTEGRATION ERROR:
   summary (JSON: integration_error), and above 1e-3 a warning on stderr says what to
   do: --method dopri, --samples-per-step 1, or a higher sampling rate.
 
+SIGNAL MAP:
+  A model file with a [signal] table (written by `nlsdof fit-time`) drives the model with
+  gamma = input_gain * (input + input_offset) and adds a column y = x + output_offset.
+
 OUTPUT:
   --out FILE.csv: header t,accel,x,v (s, m/s^2 input as used, m, m/s), one row per
-  (decimated) sample. A one-line summary (or --json) goes to stdout.
+  (decimated) sample; t,accel,x,v,y with a [signal] table. A one-line summary (or --json) goes to stdout.
 
 EXAMPLE:
   nlsdof signal chirp --amplitude 0.25 --f0 4.5 --f1 6 --duration 300 --fs 2048 --out chirp.csv
@@ -125,6 +129,20 @@ EXAMPLE:
 /// Loads a model file; a multi-line parse message is folded to one line.
 pub(crate) fn load_model(path: &Path) -> Result<Model, CliError> {
     nlsdof_io::model_file::read_model(path).map_err(|e| {
+        let msg = e.to_string();
+        if msg.contains('\n') {
+            CliError::Usage(msg.split_whitespace().collect::<Vec<_>>().join(" "))
+        } else {
+            CliError::Io(e)
+        }
+    })
+}
+
+/// [`load_model`] with the optional `[signal]` table of `fit-time` models.
+pub(crate) fn load_model_with_signal(
+    path: &Path,
+) -> Result<(Model, Option<nlsdof_io::model_file::SignalMap>), CliError> {
+    nlsdof_io::model_file::read_model_with_signal(path).map_err(|e| {
         let msg = e.to_string();
         if msg.contains('\n') {
             CliError::Usage(msg.split_whitespace().collect::<Vec<_>>().join(" "))
@@ -215,15 +233,20 @@ pub fn run(a: Args) -> Result<(), CliError> {
             "--decimate 0 is not allowed: give N >= 1 (write every N-th sample)".into(),
         ));
     }
-    let model = load_model(&a.model)?;
+    let (model, signal_map) = load_model_with_signal(&a.model)?;
     let nm = model.normalised()?;
     nlsdof::simulation::check_model(&nm)?;
-    let signal = with_spinner("reading input", || {
+    let mut signal = with_spinner("reading input", || {
         read_signal(&a.input, a.fs, a.var.as_deref())
     })?;
-    let input = signal
-        .as_input()?
-        .with_gain(if a.base { -1.0 } else { 1.0 })?;
+    let map = signal_map.unwrap_or_default();
+    if map.input_offset != 0.0 {
+        for v in signal.values.iter_mut() {
+            *v += map.input_offset;
+        }
+    }
+    let gain = if a.base { -1.0 } else { 1.0 } * map.input_gain;
+    let input = signal.as_input()?.with_gain(gain)?;
     let uniform = matches!(signal.grid, SignalGrid::Uniform { .. });
     // Default on uniform sampling: RK4 with h = 1/fs and cubic mid-step
     // inputs, run as RK4 with two samples per step on the input upsampled 2x.
@@ -247,14 +270,19 @@ pub fn run(a: Args) -> Result<(), CliError> {
             }
         }
     };
-    let gain = if a.base { -1.0 } else { 1.0 };
     let initial = State { x: a.x0, v: a.v0 };
     let opts = Options {
         method,
         initial,
         decimation: 1,
     };
-    let mut out = CsvWriter::create(&a.out, &["t", "accel", "x", "v"])?;
+    let with_y = signal_map.is_some();
+    let header: &[&str] = if with_y {
+        &["t", "accel", "x", "v", "y"]
+    } else {
+        &["t", "accel", "x", "v"]
+    };
+    let mut out = CsvWriter::create(&a.out, header)?;
     let n = input.len() as u64;
     let progress = Progress::new(n, "simulating");
     let mut write_err = None;
@@ -273,7 +301,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         if k % a.decimate == 0 {
             if write_err.is_none() {
-                if let Err(e) = out.row(&[input.time(k), u, x, v]) {
+                let r = if with_y {
+                    out.row(&[input.time(k), u, x, v, x + map.output_offset])
+                } else {
+                    out.row(&[input.time(k), u, x, v])
+                };
+                if let Err(e) = r {
                     write_err = Some(e);
                 }
             }

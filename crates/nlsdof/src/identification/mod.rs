@@ -8,12 +8,15 @@
 //! * [`levenberg_marquardt`] — bounded LM (the local solver).
 //! * [`global`] — seeded parallel multistart.
 //! * [`uncertainty`] — standard errors, 95 % intervals, correlations.
+//! * [`time_domain`] — output-error fit of Eq 32 to a recorded input and
+//!   output (its own parameter vector with gain, offsets, initial state).
 //!
 //! Everything is in mass-normalised parameters θ = (α, δ, β, ρ, κ, η, gain):
 //! with acceleration input only ratios to m are identifiable. The model
 //! sees the input `gain · γ` (a point on a continuous structure).
 
 pub mod data;
+pub mod decay;
 pub mod equation_error;
 pub mod global;
 pub mod identify;
@@ -23,6 +26,7 @@ pub mod levenberg_marquardt;
 pub mod models;
 pub mod objective;
 pub mod phase_resonance;
+pub mod time_domain;
 pub mod uncertainty;
 
 pub use data::{Curve, DataError, Dataset, Record};

@@ -1,0 +1,350 @@
+//! `nlsdof fit-time`: output-error fit of Eq 32 to a recorded input and
+//! output (library: `nlsdof::identification::time_domain`), validation on
+//! test ranges, model file with the signal map, prediction CSV.
+
+use crate::error::CliError;
+use nlsdof::identification::time_domain::{
+    check_ranges, fit, predict, uniform_fs, Prediction, Record, SampleRange, TimeFitOptions,
+    INIT_WINDOW, MAX_EXPONENT, TIME_PARAM_NAMES,
+};
+use nlsdof::identification::ModelKind;
+use nlsdof_io::model_file::{model_to_toml, signal_to_toml, SignalMap};
+use nlsdof_io::signal_file::CsvWriter;
+use nlsdof_io::table_file::read_columns;
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args)]
+#[command(
+    about = "Fit the power-law ODE (Eq 32) to a recorded input and output in the time domain (output error, exact RK4 gradients)",
+    after_long_help = FIT_TIME_HELP
+)]
+pub struct Args {
+    /// Table with the input and output columns (CSV; a header is optional, quoted names and a trailing comma are fine).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// Input column: header name or 0-based index.
+    #[arg(long, value_name = "C")]
+    pub input_column: String,
+    /// Output column: header name or 0-based index.
+    #[arg(long, value_name = "C")]
+    pub output_column: String,
+    /// Sampling frequency, Hz (or give --time-column).
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    pub fs: Option<f64>,
+    /// Time column (s); must be uniformly sampled. Instead of --fs.
+    #[arg(long, value_name = "C")]
+    pub time_column: Option<String>,
+    /// Estimation range A:B, 0-based half-open sample indices.
+    #[arg(long, value_name = "A:B")]
+    pub range: String,
+    /// Model: linear, duffing, generalised, quadratic, duffing-quadratic, duffing-generalised, generalised-damping, generalised-stiffness.
+    #[arg(long, value_name = "KIND")]
+    pub model: String,
+    /// Test range A:B (0-based half-open; may be repeated): predicted from its input and its first 50 output samples.
+    #[arg(long, value_name = "A:B")]
+    pub test: Vec<String>,
+    /// Prediction CSV t,u,y_measured,y_model over the (single) --test range.
+    #[arg(long, value_name = "PRED.csv")]
+    pub predict: Option<PathBuf>,
+    /// Fitted model file (TOML, per unit mass, with the [signal] gain and offsets).
+    #[arg(long, value_name = "MODEL.toml")]
+    pub out: Option<PathBuf>,
+    /// Starts of the free-exponent stage (1 = from rho = 2, eta = 1; more add seeded random exponents).
+    #[arg(long, default_value_t = 1)]
+    pub starts: usize,
+    /// Levenberg-Marquardt iteration limit of each stage.
+    #[arg(long, value_name = "N", default_value_t = 400)]
+    pub max_iterations: usize,
+    /// Seed of the extra starts.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+const FIT_TIME_HELP: &str = "MODEL (paper Eq 32, mass-normalised, recorded signals u, y):
+  x'' + delta x' + alpha x + kappa x'|x'|^eta + beta x|x|^rho = gain (u + input_offset)
+  y = x + output_offset
+  Exponents are restricted to rho >= 0 and eta >= 0 (the sensitivity equations are
+  singular at x = 0 / v = 0 otherwise). With --model linear the input offset is fixed at 0
+  (only the sum of the two offsets is identifiable).
+
+METHOD:
+  RK4 with h = 1/(2 fs) and the input cubic between samples (the default of
+  `nlsdof simulate`), exact discrete gradients by forward sensitivities, bounded
+  Levenberg-Marquardt from an equation-error estimate; free exponents in a second
+  stage (--starts, --seed). The initial state is fitted too.
+
+TEST:
+  Each --test range is simulated from its input; only its first 50 output samples are
+  used, to fit the initial state. The score is the RMS error over the rest of the range
+  (printed x1000: mV when the output is in volts).
+
+OUTPUT:
+  --out MODEL.toml: mass = 1 (per unit mass) and a [signal] table with input_gain,
+  input_offset, output_offset. `nlsdof simulate --model MODEL.toml --input PRED.csv
+  --x0 X --v0 V --out sim.csv` reproduces y_model (column y) with the initial state that
+  fit-time prints for the test range.
+  --predict PRED.csv: t,u,y_measured,y_model over the --test range (one --test only).
+
+EXAMPLE (Silverbox, ../shared/data/silverbox):
+  nlsdof fit-time --input SNLS80mV.csv --input-column V1 --output-column V2 \\
+      --fs 610.3515625 --range 40650:105712 --model duffing --test 100:40575 \\
+      --predict arrow.csv --out silverbox.toml";
+
+fn parse_range(flag: &str, s: &str) -> Result<SampleRange, CliError> {
+    let bad = || {
+        CliError::Usage(format!(
+            "{flag} {s:?} is not a range A:B of 0-based sample indices (half-open, A < B)"
+        ))
+    };
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let a: usize = a.trim().parse().map_err(|_| bad())?;
+    let b: usize = b.trim().parse().map_err(|_| bad())?;
+    Ok(SampleRange::new(a, b))
+}
+
+pub fn run(a: Args) -> Result<(), CliError> {
+    let t_start = Instant::now();
+    let kind = ModelKind::parse(&a.model).ok_or_else(|| {
+        CliError::Usage(format!(
+            "--model {:?} is not a model (linear, duffing, generalised, quadratic, duffing-quadratic, duffing-generalised, generalised-damping, generalised-stiffness)",
+            a.model
+        ))
+    })?;
+    if kind == ModelKind::Coulomb {
+        return Err(CliError::Usage(
+            "--model coulomb is not supported by fit-time (eta = -1 < 0: the sensitivity equations are singular at v = 0)".into(),
+        ));
+    }
+    if a.max_iterations == 0 {
+        return Err(CliError::Usage(
+            "--max-iterations 0: give at least 1".into(),
+        ));
+    }
+    if a.starts == 0 {
+        return Err(CliError::Usage("--starts 0: give at least 1".into()));
+    }
+    let range = parse_range("--range", &a.range)?;
+    let tests: Vec<SampleRange> = a
+        .test
+        .iter()
+        .map(|s| parse_range("--test", s))
+        .collect::<Result<_, _>>()?;
+    if a.predict.is_some() && tests.len() != 1 {
+        return Err(CliError::Usage(format!(
+            "--predict needs exactly one --test range ({} given)",
+            tests.len()
+        )));
+    }
+    let mut targets: Vec<(&str, &std::path::Path)> = Vec::new();
+    if let Some(p) = &a.out {
+        targets.push(("--out", p));
+    }
+    if let Some(p) = &a.predict {
+        targets.push(("--predict", p));
+    }
+    nlsdof_io::atomic::check_targets(&targets)?;
+    if let Some(fs) = a.fs {
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(CliError::Usage(format!(
+                "--fs {fs} must be a finite sampling frequency > 0 Hz"
+            )));
+        }
+    }
+    let mut cols = vec![a.input_column.as_str(), a.output_column.as_str()];
+    match (&a.fs, &a.time_column) {
+        (Some(_), Some(_)) => {
+            return Err(CliError::Usage(
+                "give either --fs or --time-column, not both".into(),
+            ))
+        }
+        (None, None) => {
+            return Err(CliError::Usage(
+                "the sampling frequency is needed: give --fs HZ or --time-column C".into(),
+            ))
+        }
+        (None, Some(t)) => cols.push(t.as_str()),
+        _ => {}
+    }
+    let table = read_columns(&a.input, &cols)?;
+    let (u, y) = (&table.columns[0], &table.columns[1]);
+    let (fs, t0) = match a.fs {
+        Some(fs) => (fs, 0.0),
+        None => {
+            let t = &table.columns[2];
+            let fs = uniform_fs(t, 1e-3).map_err(|e| {
+                CliError::Usage(format!(
+                    "{}: column {:?}: {e}",
+                    a.input.display(),
+                    table.names[2]
+                ))
+            })?;
+            (fs, t[0])
+        }
+    };
+    let rec = Record::new(u, y, fs)?;
+    if tests.is_empty() {
+        check_ranges(u.len(), range, None)?;
+    }
+    for t in &tests {
+        check_ranges(u.len(), range, Some(*t))?;
+    }
+    let mut opts = TimeFitOptions {
+        starts: a.starts,
+        seed: a.seed,
+        ..TimeFitOptions::default()
+    };
+    opts.lm.max_iterations = a.max_iterations;
+    opts.lm.max_evaluations = 3 * a.max_iterations;
+    let t_fit = Instant::now();
+    let res = crate::cmd::simulate::with_spinner("fitting", || fit(&rec, range, kind, &opts))?;
+    let fit_s = t_fit.elapsed().as_secs_f64();
+    let tm = res.model();
+    let preds: Vec<Prediction> = tests
+        .iter()
+        .map(|t| predict(&rec, *t, &tm))
+        .collect::<Result<_, _>>()?;
+    let signal = SignalMap {
+        input_gain: tm.gain,
+        input_offset: tm.input_offset,
+        output_offset: tm.output_offset,
+    };
+    if let Some(p) = &a.out {
+        let model = tm.model.to_physical(1.0)?;
+        let text = format!(
+            "# fitted by `nlsdof fit-time`, model {kind}, range {}:{} of {}, RMS output error {:e}\n# m = 1 kg: all values are per unit mass; the [signal] table maps the recorded u, y\n{}{}",
+            range.start,
+            range.end,
+            a.input.display(),
+            res.rms,
+            model_to_toml(&model),
+            signal_to_toml(&signal)
+        );
+        nlsdof_io::atomic::write_atomic(p, text.as_bytes())?;
+    }
+    if let (Some(p), Some(pr)) = (&a.predict, preds.first()) {
+        let mut w = CsvWriter::create(p, &["t", "u", "y_measured", "y_model"])?;
+        for (k, ym) in pr.y_model.iter().enumerate() {
+            let i = pr.range.start + k;
+            w.row(&[t0 + i as f64 / fs, u[i], y[i], *ym])?;
+        }
+        w.commit()?;
+    }
+    let unc = res.uncertainty.as_ref();
+    let at_bounds: Vec<&str> = res
+        .free
+        .iter()
+        .filter(|&&p| {
+            let v = res.theta[p];
+            match TIME_PARAM_NAMES[p] {
+                "delta" | "kappa" => v == 0.0,
+                "rho" | "eta" => v == 0.0 || v == MAX_EXPONENT,
+                _ => false,
+            }
+        })
+        .map(|&p| TIME_PARAM_NAMES[p])
+        .collect();
+    let warning = if !res.termination.converged() {
+        Some(format!("the fit did not converge ({})", res.termination))
+    } else if unc.is_none() {
+        Some("J'J is singular at the optimum: a parameter is not identifiable, no intervals".into())
+    } else {
+        None
+    };
+    if a.json {
+        let params: serde_json::Map<String, serde_json::Value> = TIME_PARAM_NAMES
+            .iter()
+            .zip(res.theta.iter())
+            .map(|(n, v)| (n.to_string(), json!(v)))
+            .collect();
+        let intervals: Vec<_> = unc
+            .map(|u| {
+                (0..u.names.len())
+                    .map(|k| {
+                        json!({"name": u.names[k], "value": u.values[k], "std_error": u.std_errors[k],
+                               "lower": u.lower[k], "upper": u.upper[k]})
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        let v = json!({
+            "input": a.input,
+            "model": kind.name(),
+            "fs_hz": fs,
+            "samples": u.len(),
+            "parameters": params,
+            "free": res.free.iter().map(|&p| TIME_PARAM_NAMES[p]).collect::<Vec<_>>(),
+            "intervals_95": intervals,
+            "converged": res.termination.converged(),
+            "termination": res.termination.name(),
+            "iterations": res.iterations,
+            "warning": warning,
+            "at_bounds": at_bounds,
+            "estimation": {
+                "range": [range.start, range.end],
+                "rms": res.rms,
+                "start_rms": res.start_rms,
+            },
+            "tests": preds.iter().map(|p| json!({
+                "range": [p.range.start, p.range.end],
+                "rms": p.rms,
+                "score_x1000": 1000.0 * p.rms,
+                "init_window": INIT_WINDOW,
+                "initial": {"x0": p.initial.x, "v0": p.initial.v},
+            })).collect::<Vec<_>>(),
+            "fit_s": fit_s,
+            "total_s": t_start.elapsed().as_secs_f64(),
+        });
+        println!("{v}");
+    } else {
+        if let Some(w) = &warning {
+            println!("WARNING: {w}");
+        }
+        if !at_bounds.is_empty() {
+            println!(
+                "note: at a bound (its interval is not meaningful): {}",
+                at_bounds.join(", ")
+            );
+        }
+        println!(
+            "fit-time {kind} on {} samples {}:{} at {fs} Hz: RMS output error {:.6e} (equation-error start {:.6e}), {} ({} iterations) in {:.2} s",
+            range.len(),
+            range.start,
+            range.end,
+            res.rms,
+            res.start_rms,
+            res.termination,
+            res.iterations,
+            fit_s
+        );
+        println!("  parameter        value                 95 % interval");
+        for (k, name) in TIME_PARAM_NAMES.iter().enumerate() {
+            let free = res.free.contains(&k);
+            let iv = match (free, unc) {
+                (true, Some(u)) => {
+                    let i = u.names.iter().position(|n| n == name).unwrap_or(0);
+                    format!("[{:.6e}, {:.6e}]", u.lower[i], u.upper[i])
+                }
+                (true, None) => "-".into(),
+                (false, _) => "fixed".into(),
+            };
+            println!("  {name:<14} {:>22.12e}  {iv}", res.theta[k]);
+        }
+        for p in &preds {
+            println!(
+                "test {}:{}: RMS error of y[{INIT_WINDOW}:] {:.6e} (x1000 = {:.4}); initial state x0 = {:e}, v0 = {:e}",
+                p.range.start,
+                p.range.end,
+                p.rms,
+                1000.0 * p.rms,
+                p.initial.x,
+                p.initial.v
+            );
+        }
+    }
+    Ok(())
+}

@@ -9,6 +9,10 @@
 //!   0-based index.
 //! * LabVIEW `.lvm` text: everything up to the second `***End_of_Header***`
 //!   line is skipped, then the tab-separated column names and rows.
+//! * Polytec ASCII export (the beam impact records): a preamble of
+//!   `Key:\tvalue` lines, a tab-separated header (`Time\tTime Signal`) and a
+//!   line of bracketed units (`[ s ]\t[ m/s ]`); the header is the line
+//!   before the units line, and the units line is skipped.
 //! * Blank lines and lines starting with `#` are skipped. Every selected
 //!   field must be a finite number; errors name the file, the line and the
 //!   field. Unselected columns are not parsed (they may be empty).
@@ -83,10 +87,30 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
         .nth(1)
         .map(|(i, _)| i + 1)
         .unwrap_or(0);
+    // Polytec ASCII: the header is the line before a line of `[ unit ]` fields
+    let is_units = |l: &str| {
+        let f: Vec<&str> = l
+            .trim_end_matches('\r')
+            .split('\t')
+            .map(str::trim)
+            .collect();
+        f.len() >= 2
+            && f.iter()
+                .filter(|x| !x.is_empty())
+                .all(|x| x.starts_with('[') && x.ends_with(']'))
+            && f.iter().any(|x| !x.is_empty())
+    };
+    let units = if skip == 0 {
+        text.lines().take(64).position(is_units).filter(|&u| u > 0)
+    } else {
+        None
+    };
+    let skip = units.map_or(skip, |u| u - 1);
     let mut lines = text
         .lines()
         .enumerate()
         .skip(skip)
+        .filter(|(i, _)| Some(*i) != units)
         .map(|(i, l)| (i as u64 + 1, l.trim_end_matches('\r')))
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
         .peekable();
@@ -210,6 +234,15 @@ mod tests {
         let text = b"LabVIEW Measurement\t\nX_Columns\tOne\n***End_of_Header***\t\n\nChannels\t2\n***End_of_Header***\t\t\nX_Value\tStrain_0\tComment\r\n0.000\t0.000211\t\r\n0.001\t2.1E-4\t\r\n";
         let t = parse_columns(text, Path::new("a.lvm"), &["X_Value", "Strain_0"]).unwrap();
         assert_eq!(t.columns, vec![vec![0.0, 0.001], vec![0.000211, 2.1e-4]]);
+    }
+
+    #[test]
+    fn polytec_ascii_preamble_and_units() {
+        let text = b"Source File Name:\tt3\nPoint Index:\t1\t[x = 0.03\ty = 0.02\tz = -1.23]\nComponent:\tRoot\nSignal:\tTime - Vib Velocity - Samples\n\nTime\tTime Signal\n[ s ]\t[ m/s ]\n0\t0.001976648\n0.0001\t-0.005674316\n";
+        let t = parse_columns(text, Path::new("v.txt"), &["Time", "Time Signal"]).unwrap();
+        assert_eq!(t.names, vec!["Time", "Time Signal"]);
+        assert_eq!(t.columns[0], vec![0.0, 0.0001]);
+        assert_eq!(t.columns[1], vec![0.001976648, -0.005674316]);
     }
 
     #[test]

@@ -53,7 +53,7 @@
 use super::data::Dataset;
 use super::levenberg_marquardt::LeastSquares;
 use super::models::*;
-use super::objective::{evaluate, normalised_model, Problem};
+use super::objective::{evaluate, evaluate_with_jumps, normalised_model, FirstJump, Problem};
 use crate::error::SolveError;
 use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 use crate::power_law::g_unchecked;
@@ -273,9 +273,24 @@ impl<'a> WithJumps<'a> {
         let sw = r
             .sweep_from(&c.omegas, c.direction, super::objective::first_amplitude(c))
             .ok()?;
-        match sw.jumps.first() {
-            Some(j) => fold_frequency_derivatives(theta, c.gamma, j.omega, j.amplitude_before)
-                .map(|d| (j.omega, d)),
+        self.predicted_from(
+            theta,
+            t,
+            sw.jumps.first().map(|j| (j.omega, j.amplitude_before)),
+        )
+    }
+
+    /// [`Self::predicted`] from the curve's first model jump `(Ω, a before)`
+    /// already found by its sweep.
+    fn predicted_from(
+        &self,
+        theta: &[f64; N_PARAMS],
+        t: &JumpTarget,
+        jump: FirstJump,
+    ) -> Option<(f64, [f64; N_PARAMS])> {
+        let c = &self.problem.data.curves[t.curve];
+        match jump {
+            Some((w, a)) => fold_frequency_derivatives(theta, c.gamma, w, a).map(|d| (w, d)),
             None => quadrature_frequency(theta, c.gamma).ok()?,
         }
     }
@@ -287,15 +302,40 @@ impl<'a> WithJumps<'a> {
         jacobian: bool,
     ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
         use rayon::prelude::*;
-        let sw = self.weight.sqrt();
-        let mut r = Vec::with_capacity(self.targets.len());
-        let mut j = Vec::new();
         // one model sweep per target, in parallel (collected in order)
         let predicted: Vec<Option<(f64, [f64; N_PARAMS])>> = self
             .targets
             .par_iter()
             .map(|t| self.predicted(theta, t))
             .collect();
+        self.jump_residuals_of(predicted, jacobian)
+    }
+
+    /// The jump residuals from the first model jump of every curve (data
+    /// order), as [`super::objective::evaluate_with_jumps`] returns them.
+    fn jump_residuals_from(
+        &self,
+        theta: &[f64; N_PARAMS],
+        jumps: &[FirstJump],
+        jacobian: bool,
+    ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
+        use rayon::prelude::*;
+        let predicted: Vec<Option<(f64, [f64; N_PARAMS])>> = self
+            .targets
+            .par_iter()
+            .map(|t| self.predicted_from(theta, t, *jumps.get(t.curve)?))
+            .collect();
+        self.jump_residuals_of(predicted, jacobian)
+    }
+
+    fn jump_residuals_of(
+        &self,
+        predicted: Vec<Option<(f64, [f64; N_PARAMS])>>,
+        jacobian: bool,
+    ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
+        let sw = self.weight.sqrt();
+        let mut r = Vec::with_capacity(self.targets.len());
+        let mut j = Vec::new();
         for (t, p) in self.targets.iter().zip(predicted) {
             let (w, dw) = p?;
             let f = sw * t.scale / t.omega;
@@ -338,25 +378,27 @@ impl LeastSquares for WithJumps<'_> {
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
         let th = self.problem.theta(u);
-        // the Eq 31 sweeps and the jump sweeps run side by side
-        let (r, jr) = rayon::join(
-            || self.problem.residuals(u),
-            || self.jump_residuals(&th, false),
-        );
-        let mut r = r?;
-        let (rj, _) = jr?;
+        // one sweep per curve serves Eq 31 and the jump residuals
+        let (e, jumps) = evaluate_with_jumps(
+            self.problem.data,
+            &th,
+            false,
+            self.problem.spec.phase_weight,
+        )
+        .ok()?;
+        let mut r = e.residuals;
+        let (rj, _) = self.jump_residuals_from(&th, &jumps, false)?;
         r.extend(rj);
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.problem.theta(u);
-        let (rj0, jr) = rayon::join(
-            || self.problem.residuals_and_jacobian(u),
-            || self.jump_residuals(&th, true),
-        );
-        let (mut r, mut j) = rj0?;
-        let (rj, jj) = jr?;
+        let (e, jumps) =
+            evaluate_with_jumps(self.problem.data, &th, true, self.problem.spec.phase_weight)
+                .ok()?;
+        let (mut r, mut j) = self.problem.residuals_and_jacobian_of(&th, e)?;
+        let (rj, jj) = self.jump_residuals_from(&th, &jumps, true)?;
         let cols = self.problem.dtheta_du(&th);
         for row in &jj {
             for col in &cols {

@@ -626,6 +626,21 @@ pub fn model_response(
     data: &Dataset,
     theta: &[f64; N_PARAMS],
 ) -> Result<Vec<Vec<(f64, f64)>>, SolveError> {
+    Ok(model_sweeps(data, theta)?
+        .into_iter()
+        .map(|c| c.0)
+        .collect())
+}
+
+/// The model's first jump on one curve's sweep: `(Ω, a before the jump)`.
+pub type FirstJump = Option<(f64, f64)>;
+
+/// [`model_response`] with each curve's first jump (in sweep order), from
+/// the same sweeps (the jump residuals reuse them instead of sweeping again).
+pub fn model_sweeps(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+) -> Result<Vec<(Vec<(f64, f64)>, FirstJump)>, SolveError> {
     use rayon::prelude::*;
     let model = normalised_model(theta);
     data.curves
@@ -651,7 +666,8 @@ pub fn model_response(
             if c.direction == SweepDirection::Down {
                 out.reverse();
             }
-            Ok(out)
+            let jump = sw.jumps.first().map(|j| (j.omega, j.amplitude_before));
+            Ok((out, jump))
         })
         .collect()
 }
@@ -700,12 +716,37 @@ pub fn evaluate_with_phase(
     phase_weight: Option<f64>,
 ) -> Result<Evaluation, SolveError> {
     let resp = model_response(data, theta)?;
+    Ok(evaluation_of(data, theta, &resp, jacobian, phase_weight))
+}
+
+/// [`evaluate_with_phase`] with the curves' first model jumps (for the jump
+/// residuals), from one sweep per curve.
+pub fn evaluate_with_jumps(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+    jacobian: bool,
+    phase_weight: Option<f64>,
+) -> Result<(Evaluation, Vec<FirstJump>), SolveError> {
+    let (resp, jumps): (Vec<_>, Vec<_>) = model_sweeps(data, theta)?.into_iter().unzip();
+    Ok((
+        evaluation_of(data, theta, &resp, jacobian, phase_weight),
+        jumps,
+    ))
+}
+
+fn evaluation_of(
+    data: &Dataset,
+    theta: &[f64; N_PARAMS],
+    resp: &[Vec<(f64, f64)>],
+    jacobian: bool,
+    phase_weight: Option<f64>,
+) -> Evaluation {
     let n = data.len();
     let mut model = Vec::with_capacity(n);
     let mut residuals = Vec::with_capacity(n);
     let mut jac = jacobian.then(|| Vec::with_capacity(n));
     let dc = DerivativeConstants::new(theta);
-    for (c, am) in data.curves.iter().zip(&resp) {
+    for (c, am) in data.curves.iter().zip(resp) {
         for i in 0..c.omegas.len() {
             let sw = c.weights[i].sqrt();
             let a = am[i].0;
@@ -726,7 +767,7 @@ pub fn evaluate_with_phase(
         }
     }
     if let Some(wp) = phase_weight {
-        for (c, am) in data.curves.iter().zip(&resp) {
+        for (c, am) in data.curves.iter().zip(resp) {
             let Some(ph) = &c.phases else { continue };
             for i in 0..c.omegas.len() {
                 let k = (wp * c.weights[i]).sqrt() * c.amplitudes[i] / c.gamma;
@@ -752,11 +793,11 @@ pub fn evaluate_with_phase(
             }
         }
     }
-    Ok(Evaluation {
+    Evaluation {
         model,
         residuals,
         jacobian: jac,
-    })
+    }
 }
 
 /// The fit problem in optimisation variables `u` (module docs).
@@ -902,24 +943,14 @@ pub fn ambiguous_start(data: &Dataset, theta: &[f64; N_PARAMS]) -> bool {
     })
 }
 
-impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
-    fn n_params(&self) -> usize {
-        self.free.len()
-    }
-
-    fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
-        let th = self.theta(u);
-        let e = evaluate_with_phase(self.data, &th, false, self.spec.phase_weight).ok()?;
-        e.residuals
-            .iter()
-            .all(|r| r.is_finite())
-            .then_some(e.residuals)
-    }
-
-    fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
-        let th = self.theta(u);
-        let e = evaluate_with_phase(self.data, &th, true, self.spec.phase_weight).ok()?;
-        let cols = self.dtheta_du(&th);
+impl Problem<'_> {
+    /// Residuals and `∂r/∂u` (row-major) of an evaluation at `th = θ(u)`.
+    pub(crate) fn residuals_and_jacobian_of(
+        &self,
+        th: &[f64; N_PARAMS],
+        e: Evaluation,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let cols = self.dtheta_du(th);
         let n = self.free.len();
         let jt = e.jacobian.as_ref()?;
         let mut j = Vec::with_capacity(jt.len() * n);
@@ -938,5 +969,26 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
             .iter()
             .all(|r| r.is_finite())
             .then_some((e.residuals, j))
+    }
+}
+
+impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
+    fn n_params(&self) -> usize {
+        self.free.len()
+    }
+
+    fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
+        let th = self.theta(u);
+        let e = evaluate_with_phase(self.data, &th, false, self.spec.phase_weight).ok()?;
+        e.residuals
+            .iter()
+            .all(|r| r.is_finite())
+            .then_some(e.residuals)
+    }
+
+    fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let th = self.theta(u);
+        let e = evaluate_with_phase(self.data, &th, true, self.spec.phase_weight).ok()?;
+        self.residuals_and_jacobian_of(&th, e)
     }
 }

@@ -36,13 +36,11 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
-    pub pr: super::phase_resonance::PrArgs,
+    pub pr: super::sign::PrArgs,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    if args.pr.phase_resonance {
-        return super::phase_resonance::run_compare_args(&args);
-    }
+    // (`compare --phase-resonance` is dispatched to `phase_resonance::run_compare_args`)
     let sign = args.pr.sign.resolve(args.pr.softening)?;
     let data = args.data.load()?;
     let kinds = args
@@ -54,7 +52,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if kinds.is_empty() {
         return Err(CliError::Usage("--models is empty".into()));
     }
-    let staged = sign == super::phase_resonance::SignArg::Data;
+    let staged = sign == super::sign::SignArg::Data;
     let starts = args.starts.unwrap_or(if staged { 1 } else { 32 });
     if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
@@ -111,7 +109,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             }
             Ok(())
         };
-        let (r, _) = super::phase_resonance::fit_sweep_signed(&data, kind, sign, &configure, &opts)
+        let (r, _) = super::sign::fit_sweep_signed(&data, kind, sign, &configure, &opts)
             .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
         results.push((data.clone(), r));
     }

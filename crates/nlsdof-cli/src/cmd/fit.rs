@@ -16,6 +16,8 @@ use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+pub use super::progress::progress_bar;
+
 /// `--weighting` (see [`Weighting`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum WeightingArg {
@@ -200,7 +202,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
-    pub pr: super::phase_resonance::PrArgs,
+    pub pr: super::sign::PrArgs,
 }
 
 /// Minimal SVG: measured amplitudes (dots) and the model's branch-following
@@ -446,9 +448,9 @@ pub fn parse_phase_convention(s: &str) -> Result<PhaseConvention, CliError> {
 pub fn plan_from_args(
     args: &Args,
     kind: ModelKind,
-    sign: super::phase_resonance::SignArg,
+    sign: super::sign::SignArg,
 ) -> Result<(FitPlan, Option<f64>), CliError> {
-    use super::phase_resonance::SignArg;
+    use super::sign::SignArg;
     let mut plan = FitPlan::new(kind);
     // validate names and values exactly as the spec does
     let mut probe = FitSpec::new(kind, &dummy_dataset());
@@ -653,20 +655,6 @@ pub fn parse_model_kind(name: &str) -> Result<ModelKind, CliError> {
             all.join(", ")
         ))
     })
-}
-
-pub fn progress_bar(len: usize, what: &str) -> indicatif::ProgressBar {
-    let pb = indicatif::ProgressBar::with_draw_target(
-        Some(len as u64),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} starts ({elapsed})")
-    {
-        pb.set_style(style);
-    }
-    pb.set_message(what.to_string());
-    pb
 }
 
 fn hz(w: f64) -> f64 {
@@ -1013,11 +1001,7 @@ pub fn resolve_mass(
 }
 
 /// The default fit: [`identify`] (equation error, landscape, output error).
-fn run_identify(
-    args: &Args,
-    kind: ModelKind,
-    sign: super::phase_resonance::SignArg,
-) -> Result<(), CliError> {
+fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Result<(), CliError> {
     let (plan, fix_mass) = plan_from_args(args, kind, sign)?;
     let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
     // every output can be written, and no file is named twice, before any work
@@ -1073,16 +1057,9 @@ fn run_identify(
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    use super::phase_resonance::{fit_sweep_signed, sign_trials_json, sign_trials_text, SignArg};
+    use super::sign::{fit_sweep_signed, sign_trials_json, sign_trials_text, SignArg};
+    // (`fit --phase-resonance` is dispatched to `phase_resonance::run_fit_verb`)
     let sign = args.pr.sign.resolve(args.pr.softening)?;
-    if args.pr.phase_resonance {
-        if args.jump_weight.is_some() {
-            return Err(CliError::Usage(
-                "--jump-weight applies to sweep data, not to --phase-resonance points".into(),
-            ));
-        }
-        return super::phase_resonance::run_fit(&args, sign);
-    }
     if let Some(l) = args.jump_weight {
         if !(l.is_finite() && l >= 0.0) {
             return Err(CliError::Usage(format!(

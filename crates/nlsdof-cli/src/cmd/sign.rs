@@ -1,0 +1,191 @@
+//! The `--sign` choice (hardening / softening / auto) and the options of
+//! `fit` and `compare` for phase-resonance data, shared by the sweep fits
+//! (`fit`, `compare`) and the phase-resonance fits (`phase_resonance`).
+
+use super::progress::progress_bar;
+use crate::error::CliError;
+use nlsdof::identification::phase_resonance::{
+    default_spec, fit_phase_resonance, PrDataset, PrFitOptions, PrFitResult,
+};
+use nlsdof::identification::{fit, Dataset, FitOptions, FitResult, FitSpec, ModelKind, Sign};
+use serde_json::{json, Value};
+
+/// Options of `fit` and `compare` added for phase-resonance data and the
+/// stiffness sign.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PrArgs {
+    /// DATA holds phase-resonance points, one row per level: gamma,f_hz,amplitude[,level][,weight]
+    /// (frequency and amplitude where the phase lag is 90 deg, like Table 8's experimental
+    /// columns); '#' lines are comments. Unit options (--peak-to-peak, --gamma-in-g,
+    /// --velocity, --acceleration) apply as for sweeps. Not auto-detected.
+    #[arg(long = "phase-resonance")]
+    pub phase_resonance: bool,
+    /// Relative weight w_f of the frequency residuals of --phase-resonance fits. 1 (default):
+    /// a relative frequency error zeta0*e costs as much as a relative amplitude error e
+    /// (zeta0 = damping ratio of the lowest level), as a relative error e of the measured
+    /// response does to the two. > 1 trusts the frequencies more.
+    #[arg(
+        long = "frequency-weight",
+        value_name = "W",
+        default_value_t = 1.0,
+        requires = "phase_resonance"
+    )]
+    pub frequency_weight: f64,
+    /// Sign of the nonlinear stiffness beta: data (default: sweeps take the sign of the
+    /// branch-free equation-error estimate; phase-resonance points are fitted hardening),
+    /// hardening (beta > 0), softening (beta < 0), or auto (fit both, keep the lower cost,
+    /// report both).
+    #[arg(long, value_enum, default_value = "data")]
+    pub sign: SignArg,
+    /// Short for --sign softening.
+    #[arg(long)]
+    pub softening: bool,
+}
+
+/// `--sign`: sign of the fitted nonlinear stiffness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SignArg {
+    /// From the data (sweeps: sign of the equation-error estimate; phase-resonance
+    /// points: hardening).
+    #[default]
+    Data,
+    /// beta > 0.
+    Hardening,
+    /// beta < 0.
+    Softening,
+    /// Fit both signs, keep the lower cost (both costs are reported).
+    Auto,
+}
+
+impl SignArg {
+    /// `--softening` is short for `--sign softening`.
+    pub fn resolve(self, softening: bool) -> Result<SignArg, CliError> {
+        match (softening, self) {
+            (false, s) => Ok(s),
+            (true, SignArg::Data | SignArg::Hardening | SignArg::Softening) => {
+                Ok(SignArg::Softening)
+            }
+            (true, SignArg::Auto) => Err(CliError::Usage(
+                "--softening conflicts with --sign auto".into(),
+            )),
+        }
+    }
+
+    /// The signs to fit for `kind` (one sign if the model has no stiffness term).
+    pub fn signs(self, kind: ModelKind) -> Vec<Sign> {
+        use nlsdof::identification::models::Term;
+        if kind.stiffness() == Term::Absent {
+            return vec![Sign::Hardening];
+        }
+        match self {
+            SignArg::Data | SignArg::Hardening => vec![Sign::Hardening],
+            SignArg::Softening => vec![Sign::Softening],
+            SignArg::Auto => vec![Sign::Hardening, Sign::Softening],
+        }
+    }
+}
+
+/// Outcome of each sign tried by `--sign auto`: (sign, cost or error).
+pub type SignTrials = Vec<(Sign, Result<f64, String>)>;
+
+/// JSON of the `--sign auto` trials (`None` if only one sign was fitted).
+pub fn sign_trials_json(t: &SignTrials) -> Option<Value> {
+    (t.len() > 1).then(|| {
+        Value::Array(
+            t.iter()
+                .map(|(s, r)| match r {
+                    Ok(c) => json!({"sign": s.name(), "cost": c}),
+                    Err(e) => json!({"sign": s.name(), "error": e}),
+                })
+                .collect(),
+        )
+    })
+}
+
+/// Text of the `--sign auto` trials (empty if only one sign was fitted).
+pub fn sign_trials_text(t: &SignTrials, chosen: Sign) -> String {
+    if t.len() < 2 {
+        return String::new();
+    }
+    let mut s = format!("--sign auto: kept {}; ", chosen.name());
+    let parts: Vec<String> = t
+        .iter()
+        .map(|(sg, r)| match r {
+            Ok(c) => format!("{} cost {c:.6e}", sg.name()),
+            Err(e) => format!("{} failed ({e})", sg.name()),
+        })
+        .collect();
+    s.push_str(&parts.join(", "));
+    s.push('\n');
+    s
+}
+
+/// Sweep fit (Eq 31) with the stiffness sign chosen by `sign`
+/// (`Auto`: both signs, the lower cost kept). `configure` applies
+/// bounds/--fix/--free to each spec.
+pub fn fit_sweep_signed(
+    data: &Dataset,
+    kind: ModelKind,
+    sign: SignArg,
+    configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
+    opts: &FitOptions,
+) -> Result<(FitResult, SignTrials), CliError> {
+    let mut best: Option<FitResult> = None;
+    let mut trials = Vec::new();
+    let mut last_err = None;
+    for s in sign.signs(kind) {
+        let mut spec = FitSpec::new_signed(kind, data, s);
+        configure(&mut spec)?;
+        let pb = progress_bar(opts.starts, &format!("{} ({})", kind.name(), s.name()));
+        let r = fit(data, &spec, opts, &|| pb.inc(1));
+        pb.finish_and_clear();
+        match r {
+            Ok(r) => {
+                trials.push((s, Ok(r.cost)));
+                if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                    best = Some(r);
+                }
+            }
+            Err(e) => {
+                trials.push((s, Err(e.to_string())));
+                last_err = Some(e.to_string());
+            }
+        }
+    }
+    best.map(|b| (b, trials))
+        .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
+}
+
+/// Phase-resonance fit with the stiffness sign chosen by `sign`.
+pub fn fit_pr_signed(
+    data: &PrDataset,
+    kind: ModelKind,
+    sign: SignArg,
+    configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
+    opts: &PrFitOptions,
+) -> Result<(PrFitResult, SignTrials), CliError> {
+    let mut best: Option<PrFitResult> = None;
+    let mut trials = Vec::new();
+    let mut last_err = None;
+    for s in sign.signs(kind) {
+        let mut spec = default_spec(kind, data, s);
+        configure(&mut spec)?;
+        let pb = progress_bar(opts.starts, &format!("{} ({})", kind.name(), s.name()));
+        let r = fit_phase_resonance(data, &spec, opts, &|| pb.inc(1));
+        pb.finish_and_clear();
+        match r {
+            Ok(r) => {
+                trials.push((s, Ok(r.cost)));
+                if best.as_ref().map_or(true, |b| r.cost < b.cost) {
+                    best = Some(r);
+                }
+            }
+            Err(e) => {
+                trials.push((s, Err(e.to_string())));
+                last_err = Some(e.to_string());
+            }
+        }
+    }
+    best.map(|b| (b, trials))
+        .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
+}

@@ -27,8 +27,10 @@
 //!    shows a measured jump.
 //! 4. **Output error** (Eq 31, branch following, plus phase residuals
 //!    when phase is used — [`super::objective::evaluate_with_phase`]): the
-//!    bounded LM runs from each of the best `refine` candidates; the lowest
-//!    objective wins. The result says whether it converged, which
+//!    bounded LM runs from each of the best `refine` candidates (in
+//!    parallel); the lowest objective wins (a converged fit only breaks a
+//!    near tie), and a winner stopped by its iteration limit is continued
+//!    once. Residuals are Eq 31's, or relative ones ([`Weighting`]). The result says whether it converged, which
 //!    parameters sit at bounds and which the data cannot separate
 //!    ([`super::FitResult::warning`]).
 //!

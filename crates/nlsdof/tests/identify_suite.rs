@@ -211,6 +211,12 @@ fn ci_subset(weighting: Weighting, floors: (usize, usize, usize)) {
         t.consistent
     );
     assert!(t.passed >= floors.2, "{} of {n} strict", t.passed);
+    // every case whose data allow the 0.1 passes it
+    assert_eq!(
+        t.passed_informative, t.informative,
+        "{} of the {} cases whose data allow exponents within 0.1 pass",
+        t.passed_informative, t.informative
+    );
 }
 
 /// Measured (docs/identification.md), default (absolute, Eq 31) weights:

@@ -756,22 +756,7 @@ fn magnitude_start(prep: &Prepared, terms: Terms, sign_hint: f64) -> Vec<f64> {
     x
 }
 
-/// Closed-form start of the magnitude problem by *lifting*: squared, the
-/// no-phase equation of every point is linear in products of the unknowns.
-/// In the scaled unknowns of [`Magnitude`], with `u = f_a/a`, `w = Ω̃²`,
-/// `v = f_d/(Ω_ref a)` and `s = γ/(Ω_ref² a)`,
-///
-/// ```text
-/// S̃² + (Ω̃D̃)² = G² s²,   S̃ = α̃ + β̃ u − w,   Ω̃D̃ = δ̃ √w + κ̃ v
-/// ⇔ α̃² + 2α̃β̃ u + β̃² u² + (δ̃² − 2α̃) w − 2β̃ u w + 2δ̃κ̃ √w v + κ̃² v² − G² s² = −w²
-/// ```
-///
-/// which is linear least squares in `z = (α̃², α̃β̃, β̃², δ̃² − 2α̃, β̃, δ̃κ̃, κ̃², G²)`
-/// (rows divided by `G₀² s²` so that each measures a relative error, as the
-/// residual of [`Magnitude`] does). The products are then split: `α̃ = √z₁`,
-/// `β̃ = z₅`, `δ̃ = √(z₄ + 2α̃)`, `κ̃ = √z₇`, `G = √z₈`. Exact for exact data;
-/// with noise a biased but close start, from which LM needs a few steps.
-/// `None` when the lifted system is rank deficient or a square is negative.
+/// Scaled unknowns of [`solve_magnitude_lifted`] (the math is there).
 fn magnitude_lifted_start(prep: &Prepared, terms: Terms, reg: &[(f64, f64)]) -> Option<Vec<f64>> {
     let wr = prep.scales.omega_ref;
     let stiff = terms.stiffness;
@@ -868,8 +853,23 @@ fn magnitude_lifted_start(prep: &Prepared, terms: Terms, reg: &[(f64, f64)]) -> 
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// The lifted closed-form estimate of [`magnitude_lifted_start`] as a
-/// natural θ (no iteration): exact on exact data, a start otherwise.
+/// Closed-form estimate of the magnitude problem by *lifting*, as a
+/// natural θ (no iteration): squared, the
+/// no-phase equation of every point is linear in products of the unknowns.
+/// In the scaled unknowns of the magnitude problem (`solve_magnitude`), with `u = f_a/a`, `w = Ω̃²`,
+/// `v = f_d/(Ω_ref a)` and `s = γ/(Ω_ref² a)`,
+///
+/// ```text
+/// S̃² + (Ω̃D̃)² = G² s²,   S̃ = α̃ + β̃ u − w,   Ω̃D̃ = δ̃ √w + κ̃ v
+/// ⇔ α̃² + 2α̃β̃ u + β̃² u² + (δ̃² − 2α̃) w − 2β̃ u w + 2δ̃κ̃ √w v + κ̃² v² − G² s² = −w²
+/// ```
+///
+/// which is linear least squares in `z = (α̃², α̃β̃, β̃², δ̃² − 2α̃, β̃, δ̃κ̃, κ̃², G²)`
+/// (rows divided by `G₀² s²` so that each measures a relative error, as the
+/// residual of `solve_magnitude` does). The products are then split: `α̃ = √z₁`,
+/// `β̃ = z₅`, `δ̃ = √(z₄ + 2α̃)`, `κ̃ = √z₇`, `G = √z₈`. Exact for exact data;
+/// with noise a biased but close start, from which LM needs a few steps.
+/// `None` when the lifted system is rank deficient or a square is negative.
 pub fn solve_magnitude_lifted(
     prep: &Prepared,
     terms: Terms,
@@ -885,7 +885,7 @@ pub fn solve_magnitude_lifted(
 /// Equation-error fit **without phase** at fixed exponents (bounded LM on
 /// the relative magnitude residual). `warm` is a scaled start (e.g. from a
 /// neighbouring landscape node); otherwise the lifted closed-form start
-/// ([`magnitude_lifted_start`]) is used, and the trivial starts (β̃ of
+/// ([`solve_magnitude_lifted`]) is used, and the trivial starts (β̃ of
 /// either sign, damping from the peak height) are tried as well when LM
 /// from it does not converge.
 pub fn solve_magnitude(

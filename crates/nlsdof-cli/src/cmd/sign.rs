@@ -130,30 +130,11 @@ pub fn fit_sweep_signed(
     configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
     opts: &FitOptions,
 ) -> Result<(FitResult, SignTrials), CliError> {
-    let mut best: Option<FitResult> = None;
-    let mut trials = Vec::new();
-    let mut last_err = None;
-    for s in sign.signs(kind) {
+    each_sign(kind, sign, opts.starts, &|s, tick| {
         let mut spec = FitSpec::new_signed(kind, data, s);
         configure(&mut spec)?;
-        let pb = progress_bar(opts.starts, &format!("{} ({})", kind.name(), s.name()));
-        let r = fit(data, &spec, opts, &|| pb.inc(1));
-        pb.finish_and_clear();
-        match r {
-            Ok(r) => {
-                trials.push((s, Ok(r.cost)));
-                if best.as_ref().map_or(true, |b| r.cost < b.cost) {
-                    best = Some(r);
-                }
-            }
-            Err(e) => {
-                trials.push((s, Err(e.to_string())));
-                last_err = Some(e.to_string());
-            }
-        }
-    }
-    best.map(|b| (b, trials))
-        .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
+        Ok(fit(data, &spec, opts, tick).map(|r| (r.cost, r)))
+    })
 }
 
 /// Phase-resonance fit with the stiffness sign chosen by `sign`.
@@ -164,20 +145,40 @@ pub fn fit_pr_signed(
     configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
     opts: &PrFitOptions,
 ) -> Result<(PrFitResult, SignTrials), CliError> {
-    let mut best: Option<PrFitResult> = None;
+    each_sign(kind, sign, opts.starts, &|s, tick| {
+        let mut spec = default_spec(kind, data, s);
+        configure(&mut spec)?;
+        Ok(fit_phase_resonance(data, &spec, opts, tick).map(|r| (r.cost, r)))
+    })
+}
+
+/// One sign's fit for [`each_sign`]: `Err` for a bad configuration, else
+/// the fit's `(cost, result)` or its error.
+type SignRun<'a, R, E> =
+    dyn Fn(Sign, &(dyn Fn() + Sync)) -> Result<Result<(f64, R), E>, CliError> + 'a;
+
+/// Runs `run` for each sign of `sign` (one progress bar of `starts` each)
+/// and keeps the lowest-cost result; every sign's cost or error is reported.
+/// `run` returns `Err` for a bad configuration (the whole call fails) and
+/// `Ok(Err(..))` for a fit that failed (recorded, the other sign may win).
+fn each_sign<R, E: std::fmt::Display>(
+    kind: ModelKind,
+    sign: SignArg,
+    starts: usize,
+    run: &SignRun<'_, R, E>,
+) -> Result<(R, SignTrials), CliError> {
+    let mut best: Option<(f64, R)> = None;
     let mut trials = Vec::new();
     let mut last_err = None;
     for s in sign.signs(kind) {
-        let mut spec = default_spec(kind, data, s);
-        configure(&mut spec)?;
-        let pb = progress_bar(opts.starts, &format!("{} ({})", kind.name(), s.name()));
-        let r = fit_phase_resonance(data, &spec, opts, &|| pb.inc(1));
+        let pb = progress_bar(starts, &format!("{} ({})", kind.name(), s.name()));
+        let r = run(s, &|| pb.inc(1));
         pb.finish_and_clear();
-        match r {
-            Ok(r) => {
-                trials.push((s, Ok(r.cost)));
-                if best.as_ref().map_or(true, |b| r.cost < b.cost) {
-                    best = Some(r);
+        match r? {
+            Ok((cost, r)) => {
+                trials.push((s, Ok(cost)));
+                if best.as_ref().map_or(true, |b| cost < b.0) {
+                    best = Some((cost, r));
                 }
             }
             Err(e) => {
@@ -186,6 +187,6 @@ pub fn fit_pr_signed(
             }
         }
     }
-    best.map(|b| (b, trials))
+    best.map(|b| (b.1, trials))
         .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
 }

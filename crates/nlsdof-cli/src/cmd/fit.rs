@@ -3,10 +3,11 @@
 //! helpers shared with `nlsdof compare` (data loading, options, reports).
 
 use crate::error::CliError;
-use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA, RHO};
+use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA};
+use nlsdof::identification::search::{best_integer_fit, IntegerPair};
 use nlsdof::identification::{
-    fit, identify, integer_search, phase_quadrature_table, predicted_jumps, Dataset, FitOptions,
-    FitPlan, FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
+    fit, identify, phase_quadrature_table, predicted_jumps, Dataset, FitOptions, FitPlan,
+    FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
     PhaseConvention, SignChoice, Status, Weighting, N_PARAMS, PARAM_NAMES,
 };
 use nlsdof::{Model, SweepDirection};
@@ -1120,31 +1121,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut integer_table = Vec::new();
     let mut sign_trials = Vec::new();
     let res = if args.integer {
-        if spec.status[RHO] != Status::Free
-            && spec.status[nlsdof::identification::models::ETA] != Status::Free
-        {
-            return Err(CliError::Usage(format!(
-                "--integer: the {kind} model has no free exponent"
-            )));
-        }
-        let cands = integer_search(&data, &spec, &opts);
-        let mut best: Option<FitResult> = None;
-        for c in cands {
-            match &c.fit {
-                Ok(r) => {
-                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "cost": r.cost, "termination": r.termination.name()}));
-                    if best.as_ref().map_or(true, |b| r.cost < b.cost) {
-                        best = Some(r.clone());
-                    }
-                }
-                Err(e) => {
-                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "error": e.to_string()}))
-                }
-            }
-        }
-        best.ok_or_else(|| {
-            CliError::Usage("--integer: no integer exponent pair could be fitted".into())
-        })?
+        let (best, pairs) = best_integer_fit(&data, &spec, &opts)
+            .map_err(|e| CliError::Usage(format!("--integer: {e}")))?;
+        integer_table = pairs;
+        best
     } else if sign == SignArg::Auto {
         let configure = |s: &mut FitSpec| -> Result<(), CliError> {
             if let Some(b) = &args.bounds {
@@ -1181,7 +1161,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         v["jump_weight"] = json!(args.jump_weight.unwrap_or(0.0));
         if args.integer {
-            v["integer_pairs"] = Value::Array(integer_table);
+            v["integer_pairs"] = integer_pairs_json(&integer_table);
         }
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
@@ -1195,21 +1175,38 @@ pub fn run(args: Args) -> Result<(), CliError> {
         );
         s.push_str(&result_text(&data, &res, mass)?);
         if args.integer {
-            s.push_str("\ninteger exponent pairs (rho, eta): cost\n");
-            for r in &integer_table {
-                writeln!(
-                    s,
-                    "  ({}, {}): {}",
-                    r["rho"],
-                    r["eta"],
-                    r.get("cost")
-                        .map(|c| format!("{:.6e}", c.as_f64().unwrap_or(f64::NAN)))
-                        .unwrap_or_else(|| r["error"].to_string())
-                )
-                .ok();
-            }
+            s.push_str(&integer_pairs_text(&integer_table));
         }
         print!("{s}");
     }
     Ok(())
+}
+
+/// JSON of an integer search's pairs (`--integer`).
+pub fn integer_pairs_json(pairs: &[IntegerPair]) -> Value {
+    Value::Array(
+        pairs
+            .iter()
+            .map(|p| match &p.outcome {
+                Ok((cost, t)) => {
+                    json!({"rho": p.rho, "eta": p.eta, "cost": cost, "termination": t.name()})
+                }
+                Err(e) => json!({"rho": p.rho, "eta": p.eta, "error": e}),
+            })
+            .collect(),
+    )
+}
+
+/// Text of an integer search's pairs (`--integer`).
+pub fn integer_pairs_text(pairs: &[IntegerPair]) -> String {
+    let mut s = String::from("\ninteger exponent pairs (rho, eta): cost\n");
+    let show = |v: Option<i64>| v.map_or_else(|| "null".to_string(), |v| v.to_string());
+    for p in pairs {
+        let outcome = match &p.outcome {
+            Ok((cost, _)) => format!("{cost:.6e}"),
+            Err(e) => Value::String(e.clone()).to_string(),
+        };
+        writeln!(s, "  ({}, {}): {outcome}", show(p.rho), show(p.eta)).ok();
+    }
+    s
 }

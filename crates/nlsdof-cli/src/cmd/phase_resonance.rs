@@ -3,13 +3,15 @@
 //! at 90° phase per level; `nlsdof::identification::phase_resonance`), and
 //! the `--sign` choice (hardening / softening / auto) shared with sweep fits.
 
-use super::fit::{apply_bounds, apply_fix_free, parse_model_kind, resolve_mass, DataArgs};
+use super::fit::{
+    apply_bounds, apply_fix_free, integer_pairs_json, integer_pairs_text, parse_model_kind,
+    resolve_mass, DataArgs,
+};
 use super::sign::{fit_pr_signed, sign_trials_json, sign_trials_text, SignArg};
 use crate::error::CliError;
-use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
-use nlsdof::identification::phase_resonance::{
-    default_spec, integer_search_phase_resonance, PrDataset, PrFitOptions, PrFitResult,
-};
+use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA};
+use nlsdof::identification::phase_resonance::{default_spec, PrDataset, PrFitOptions, PrFitResult};
+use nlsdof::identification::search::best_integer_fit_phase_resonance;
 use nlsdof::identification::{FitSpec, ModelKind, Sign, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::phase_resonance_data::read_csv;
 use nlsdof_io::stepped_sine_data::{AmplitudeKind, ReadOptions};
@@ -309,28 +311,9 @@ pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
             },
         );
         configure(&mut spec)?;
-        if spec.status[RHO] != Status::Free && spec.status[ETA] != Status::Free {
-            return Err(CliError::Usage(format!(
-                "--integer: the {kind} model has no free exponent"
-            )));
-        }
-        let mut best: Option<PrFitResult> = None;
-        for c in integer_search_phase_resonance(&data, &spec, &opts) {
-            match c.fit {
-                Ok(r) => {
-                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "cost": r.cost, "termination": r.termination.name()}));
-                    if best.as_ref().map_or(true, |b| r.cost < b.cost) {
-                        best = Some(r);
-                    }
-                }
-                Err(e) => {
-                    integer_table.push(json!({"rho": c.rho, "eta": c.eta, "error": e.to_string()}))
-                }
-            }
-        }
-        let best = best.ok_or_else(|| {
-            CliError::Usage("--integer: no integer exponent pair could be fitted".into())
-        })?;
+        let (best, pairs) = best_integer_fit_phase_resonance(&data, &spec, &opts)
+            .map_err(|e| CliError::Usage(format!("--integer: {e}")))?;
+        integer_table = pairs;
         (best, Vec::new())
     } else {
         fit_pr_signed(&data, kind, sign, &configure, &opts)?
@@ -354,26 +337,14 @@ pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
             v["sign_auto"] = t;
         }
         if args.integer {
-            v["integer_pairs"] = Value::Array(integer_table);
+            v["integer_pairs"] = integer_pairs_json(&integer_table);
         }
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
         let mut s = sign_trials_text(&trials, res.stiffness_sign);
         s.push_str(&pr_text(&res, mass, args.pr.frequency_weight));
         if args.integer {
-            s.push_str("\ninteger exponent pairs (rho, eta): cost\n");
-            for r in &integer_table {
-                writeln!(
-                    s,
-                    "  ({}, {}): {}",
-                    r["rho"],
-                    r["eta"],
-                    r.get("cost")
-                        .map(|c| format!("{:.6e}", c.as_f64().unwrap_or(f64::NAN)))
-                        .unwrap_or_else(|| r["error"].to_string())
-                )
-                .ok();
-            }
+            s.push_str(&integer_pairs_text(&integer_table));
         }
         print!("{s}");
     }

@@ -7,6 +7,7 @@ use crate::error::CliError;
 use nlsdof::identification::phase_resonance::{
     default_spec, fit_phase_resonance, PrDataset, PrFitOptions, PrFitResult,
 };
+use nlsdof::identification::search::{fit_each_sign, signs_to_try, SignTrial};
 use nlsdof::identification::{fit, Dataset, FitOptions, FitResult, FitSpec, ModelKind, Sign};
 use serde_json::{json, Value};
 
@@ -73,29 +74,23 @@ impl SignArg {
 
     /// The signs to fit for `kind` (one sign if the model has no stiffness term).
     pub fn signs(self, kind: ModelKind) -> Vec<Sign> {
-        use nlsdof::identification::models::Term;
-        if kind.stiffness() == Term::Absent {
-            return vec![Sign::Hardening];
-        }
-        match self {
-            SignArg::Data | SignArg::Hardening => vec![Sign::Hardening],
-            SignArg::Softening => vec![Sign::Softening],
-            SignArg::Auto => vec![Sign::Hardening, Sign::Softening],
-        }
+        let preferred = if self == SignArg::Softening {
+            Sign::Softening
+        } else {
+            Sign::Hardening
+        };
+        signs_to_try(kind, self == SignArg::Auto, preferred)
     }
 }
 
-/// Outcome of each sign tried by `--sign auto`: (sign, cost or error).
-pub type SignTrials = Vec<(Sign, Result<f64, String>)>;
-
 /// JSON of the `--sign auto` trials (`None` if only one sign was fitted).
-pub fn sign_trials_json(t: &SignTrials) -> Option<Value> {
+pub fn sign_trials_json(t: &[SignTrial]) -> Option<Value> {
     (t.len() > 1).then(|| {
         Value::Array(
             t.iter()
-                .map(|(s, r)| match r {
-                    Ok(c) => json!({"sign": s.name(), "cost": c}),
-                    Err(e) => json!({"sign": s.name(), "error": e}),
+                .map(|t| match &t.cost {
+                    Ok(c) => json!({"sign": t.sign.name(), "cost": c}),
+                    Err(e) => json!({"sign": t.sign.name(), "error": e}),
                 })
                 .collect(),
         )
@@ -103,16 +98,16 @@ pub fn sign_trials_json(t: &SignTrials) -> Option<Value> {
 }
 
 /// Text of the `--sign auto` trials (empty if only one sign was fitted).
-pub fn sign_trials_text(t: &SignTrials, chosen: Sign) -> String {
+pub fn sign_trials_text(t: &[SignTrial], chosen: Sign) -> String {
     if t.len() < 2 {
         return String::new();
     }
     let mut s = format!("--sign auto: kept {}; ", chosen.name());
     let parts: Vec<String> = t
         .iter()
-        .map(|(sg, r)| match r {
-            Ok(c) => format!("{} cost {c:.6e}", sg.name()),
-            Err(e) => format!("{} failed ({e})", sg.name()),
+        .map(|t| match &t.cost {
+            Ok(c) => format!("{} cost {c:.6e}", t.sign.name()),
+            Err(e) => format!("{} failed ({e})", t.sign.name()),
         })
         .collect();
     s.push_str(&parts.join(", "));
@@ -129,7 +124,7 @@ pub fn fit_sweep_signed(
     sign: SignArg,
     configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
     opts: &FitOptions,
-) -> Result<(FitResult, SignTrials), CliError> {
+) -> Result<(FitResult, Vec<SignTrial>), CliError> {
     each_sign(kind, sign, opts.starts, &|s, tick| {
         let mut spec = FitSpec::new_signed(kind, data, s);
         configure(&mut spec)?;
@@ -144,7 +139,7 @@ pub fn fit_pr_signed(
     sign: SignArg,
     configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
     opts: &PrFitOptions,
-) -> Result<(PrFitResult, SignTrials), CliError> {
+) -> Result<(PrFitResult, Vec<SignTrial>), CliError> {
     each_sign(kind, sign, opts.starts, &|s, tick| {
         let mut spec = default_spec(kind, data, s);
         configure(&mut spec)?;
@@ -157,36 +152,31 @@ pub fn fit_pr_signed(
 type SignRun<'a, R, E> =
     dyn Fn(Sign, &(dyn Fn() + Sync)) -> Result<Result<(f64, R), E>, CliError> + 'a;
 
-/// Runs `run` for each sign of `sign` (one progress bar of `starts` each)
-/// and keeps the lowest-cost result; every sign's cost or error is reported.
-/// `run` returns `Err` for a bad configuration (the whole call fails) and
-/// `Ok(Err(..))` for a fit that failed (recorded, the other sign may win).
+/// [`fit_each_sign`] over the signs of `sign`, with one progress bar of
+/// `starts` per sign. A bad configuration (`run` returning `Err`) fails the
+/// whole call; a failed fit is recorded and the other sign may win.
 fn each_sign<R, E: std::fmt::Display>(
     kind: ModelKind,
     sign: SignArg,
     starts: usize,
     run: &SignRun<'_, R, E>,
-) -> Result<(R, SignTrials), CliError> {
-    let mut best: Option<(f64, R)> = None;
-    let mut trials = Vec::new();
-    let mut last_err = None;
-    for s in sign.signs(kind) {
+) -> Result<(R, Vec<SignTrial>), CliError> {
+    let config_error = std::cell::RefCell::new(None);
+    let found = fit_each_sign(&sign.signs(kind), &|s| {
         let pb = progress_bar(starts, &format!("{} ({})", kind.name(), s.name()));
         let r = run(s, &|| pb.inc(1));
         pb.finish_and_clear();
-        match r? {
-            Ok((cost, r)) => {
-                trials.push((s, Ok(cost)));
-                if best.as_ref().map_or(true, |b| cost < b.0) {
-                    best = Some((cost, r));
-                }
-            }
+        match r {
+            Ok(fit) => fit.map_err(|e| e.to_string()),
             Err(e) => {
-                trials.push((s, Err(e.to_string())));
-                last_err = Some(e.to_string());
+                let msg = e.to_string();
+                config_error.borrow_mut().get_or_insert(e);
+                Err(msg)
             }
         }
+    });
+    if let Some(e) = config_error.into_inner() {
+        return Err(e);
     }
-    best.map(|b| (b.1, trials))
-        .ok_or_else(|| CliError::Usage(last_err.unwrap_or_else(|| "no fit".into())))
+    found.map_err(CliError::Usage)
 }

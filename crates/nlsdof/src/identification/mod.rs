@@ -8,6 +8,8 @@
 //! * [`levenberg_marquardt`] — bounded LM (the local solver).
 //! * [`global`] — seeded parallel multistart.
 //! * [`uncertainty`] — standard errors, 95 % intervals, correlations.
+//! * [`search`] — the stiffness sign and integer exponents, chosen by
+//!   fitting each candidate and keeping the lowest cost.
 //! * [`time_domain`] — output-error fit of Eq 32 to a recorded input and
 //!   output (its own parameter vector with gain, offsets, initial state).
 //!
@@ -26,6 +28,7 @@ pub mod levenberg_marquardt;
 pub mod models;
 pub mod objective;
 pub mod phase_resonance;
+pub mod search;
 pub mod time_domain;
 pub mod uncertainty;
 

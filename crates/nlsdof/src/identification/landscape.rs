@@ -17,7 +17,10 @@
 //! **Profile-likelihood intervals** for each exponent (of the equation-error
 //! criterion): `{μ : P_μ(μ) − P_min ≤ s² χ²₁(0.95)}` with the profile
 //! `P_μ(μ) = min over the other exponent of P`, `s² = P_min/(n − p)`,
-//! located by linear interpolation between grid nodes. They are beside, not
+//! located between grid nodes by the local parabola of the profile next to
+//! its best node, and elsewhere by linear interpolation of `√(P_μ − P*)`
+//! (exact for a quadratic profile), so that an interval narrower than one
+//! grid step is not reported as a point. They are beside, not
 //! instead of, the linearised intervals of the output-error fit; an interval
 //! that reaches the grid edge is reported open on that side.
 
@@ -274,8 +277,7 @@ impl Landscape {
         let (bi, bj) = self.best()?;
         let best = self.fit_at(bi, bj)?;
         let dof = best.n_residuals.saturating_sub(best.n_unknowns + 2).max(1);
-        let cmin = best.cost;
-        let thr = cmin + cmin / dof as f64 * CHI2_1_95;
+        let s2 = best.cost / dof as f64;
         let prof: Vec<f64> = (0..axis.len())
             .map(|k| {
                 (0..n_other)
@@ -291,11 +293,52 @@ impl Landscape {
             })
             .collect();
         let kb = if which == 0 { bi } else { bj };
+        // Near its minimum the profile is quadratic, P(μ) ≈ P* + c (μ − μ*)²,
+        // and a sharp one (many points) can cross the threshold within one
+        // grid step of the best node, where a straight line between two
+        // nodes would put the bound at the node itself. So: the vertex of
+        // the parabola through the best node and its two neighbours (when
+        // it is convex and its vertex lies within one step) gives μ*, P*
+        // and c. When even the best node is above the threshold, the whole
+        // interval lies within a step of it: μ* ± √((thr − P*)/c). Otherwise
+        // each crossing interpolates √(P − P*) between the last node inside
+        // and the first outside (linear in μ for a quadratic profile).
+        let vertex =
+            (kb > 0 && kb + 1 < axis.len() && prof[kb - 1].is_finite() && prof[kb + 1].is_finite())
+                .then(|| {
+                    let (x0, x1, x2) = (axis[kb - 1], axis[kb], axis[kb + 1]);
+                    let (p0, p1, p2) = (prof[kb - 1], prof[kb], prof[kb + 1]);
+                    let c = ((p2 - p1) / (x2 - x1) - (p1 - p0) / (x1 - x0)) / (x2 - x0);
+                    let slope = (p2 - p0) / (x2 - x0) - c * (x2 + x0 - 2.0 * x1);
+                    let xs = x1 - slope / (2.0 * c);
+                    let ps = p1 - c * (xs - x1).powi(2);
+                    // a vertex below zero (a sum of squares cannot be) means the
+                    // three nodes are not on one parabola (e.g. noise-free data,
+                    // whose minimum 0 sits on the node): not used
+                    (c > 0.0 && c.is_finite() && (xs - x1).abs() <= (x2 - x0) / 2.0)
+                        .then_some((xs, ps, c))
+                        .filter(|_| ps >= 0.0 && ps <= p1)
+                })
+                .flatten();
+        let p_star = vertex.map_or(prof[kb], |v| v.1);
+        let thr = p_star + s2 * CHI2_1_95;
         let cross = |k0: usize, k1: usize| {
-            // linear interpolation of the threshold crossing between nodes
-            let (p0, p1) = (prof[k0], prof[k1]);
-            let t = if p1.is_finite() && p1 != p0 {
-                ((thr - p0) / (p1 - p0)).clamp(0.0, 1.0)
+            if let (Some((xs, ps, c)), true) = (vertex, k0 == kb && prof[kb] > thr) {
+                let half = ((thr - ps).max(0.0) / c).sqrt();
+                let x = if axis[k1] > axis[k0] {
+                    xs + half
+                } else {
+                    xs - half
+                };
+                // within the parabola's three nodes (the whole interval may
+                // lie between the best node and a neighbour)
+                let (a, b) = (axis[kb - 1], axis[kb + 1]);
+                return x.clamp(a, b);
+            }
+            let root = |p: f64| (p - p_star).max(0.0).sqrt();
+            let (s0, s1, st) = (root(prof[k0]), root(prof[k1]), root(thr));
+            let t = if prof[k1].is_finite() && s1 != s0 {
+                ((st - s0) / (s1 - s0)).clamp(0.0, 1.0)
             } else {
                 0.0
             };
@@ -320,5 +363,77 @@ impl Landscape {
             k += 1;
         }
         Some(ProfileInterval { lower, upper })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A landscape whose cost is an exact paraboloid `P = P₀ + a (ρ − ρ₀)² +
+    /// b (η − η₀)²` with its minimum between nodes: the profile interval of
+    /// ρ is `ρ₀ ± √(s² χ²₁(0.95) / a)` in closed form, `s² = P₀/(n − p)`
+    /// taken at the best node as in `profile_interval`.
+    fn paraboloid(a: f64, rho0: f64) -> Landscape {
+        let rho = Axis {
+            min: 0.0,
+            max: 4.0,
+            n: 17,
+        }
+        .values();
+        let eta = Axis {
+            min: 0.0,
+            max: 2.0,
+            n: 9,
+        }
+        .values();
+        let (p0, b, eta0) = (2.0, 3.0, 1.0);
+        let mut cost = Vec::new();
+        let mut fits = Vec::new();
+        for &e in &eta {
+            for &r in &rho {
+                let c = p0 + a * (r - rho0).powi(2) + b * (e - eta0).powi(2);
+                cost.push(c);
+                fits.push(Some(EquationErrorFit {
+                    theta: [0.0; crate::identification::models::N_PARAMS],
+                    cost: c,
+                    n_residuals: 1000,
+                    n_unknowns: 4,
+                    phase: None,
+                    unidentifiable: Vec::new(),
+                }));
+            }
+        }
+        let minima = grid_minima(&cost, rho.len(), eta.len());
+        Landscape {
+            rho,
+            eta,
+            cost,
+            fits,
+            minima,
+            with_phase: false,
+        }
+    }
+
+    #[test]
+    fn profile_interval_of_a_quadratic_profile_is_exact() {
+        // wide (several nodes) and sharp (narrower than one 0.25 step)
+        for (a, rho0) in [(0.05, 1.9), (400.0, 1.9), (400.0, 2.1)] {
+            let l = paraboloid(a, rho0);
+            let (bi, bj) = l.best().unwrap();
+            let dof = 1000 - (4 + 2);
+            let s2 = l.at(bi, bj) / dof as f64;
+            let half = (s2 * CHI2_1_95 / a).sqrt();
+            let p = l.profile_interval(0).unwrap();
+            let (lo, hi) = (p.lower.unwrap(), p.upper.unwrap());
+            // s² is taken at the best node, not at the vertex: the bound
+            // moves by the relative difference of the two costs
+            let tol = 1e-3 * half;
+            assert!(
+                (lo - (rho0 - half)).abs() < tol && (hi - (rho0 + half)).abs() < tol,
+                "a = {a}, rho0 = {rho0}: [{lo}, {hi}], expected {} ± {half}",
+                rho0
+            );
+        }
     }
 }

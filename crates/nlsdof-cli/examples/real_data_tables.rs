@@ -92,7 +92,7 @@ fn main() {
         };
         for &kind in &models {
             let t = Instant::now();
-            let id = identify(&data, &FitPlan::new(kind), &|| {});
+            let id = identify(&data, &FitPlan::new(kind), &|_| {});
             let secs = t.elapsed().as_secs_f64();
             writeln!(out, "\n### {set}, {kind} (default fit, {secs:.2} s)\n").ok();
             let id = match id {
@@ -133,7 +133,7 @@ fn main() {
                     curves: id.data.curves[n / 2..].to_vec(),
                 };
                 let t = Instant::now();
-                match identify(&lower, &FitPlan::new(kind), &|| {}) {
+                match identify(&lower, &FitPlan::new(kind), &|_| {}) {
                     Ok(cv) => {
                         writeln!(
                             out,

@@ -1167,3 +1167,65 @@ fn large_integration_error_is_estimated_and_warned() {
         );
     }
 }
+
+// ----------------------------------------------------- 11. long fits
+
+/// Item 11: a long default fit (200,000 rows in 2000 short curves, several
+/// seconds) interrupted with Ctrl-C exits 130, says so on stderr, and
+/// leaves neither its `--out` nor its `--plot` file nor a temporary.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_during_a_long_fit_writes_nothing() {
+    use std::fmt::Write as _;
+    let dir = tempfile::tempdir().unwrap();
+    // a linear oscillator (f_n = 10 Hz, ζ = 2 %), exact amplitudes
+    let (wn, zeta) = (2.0 * std::f64::consts::PI * 10.0, 0.02);
+    let mut csv = String::from("level,gamma,f_hz,amplitude,sweep\n");
+    for l in 0..2000 {
+        let g = 0.5 + l as f64 * 1e-3;
+        for i in 0..100 {
+            let f = 8.0 + 4.0 * i as f64 / 99.0;
+            let w = 2.0 * std::f64::consts::PI * f;
+            let a = g / ((wn * wn - w * w).powi(2) + (2.0 * zeta * wn * w).powi(2)).sqrt();
+            writeln!(csv, "L{l},{g},{f},{a:e},up").unwrap();
+        }
+    }
+    let data = write(dir.path(), "big.csv", &csv);
+    let out = dir.path().join("fit.toml");
+    let plot = dir.path().join("fit.svg");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+        .args([
+            "fit",
+            s(&data),
+            "--model",
+            "generalised",
+            "--out",
+            s(&out),
+            "--plot",
+            s(&plot),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let running = child.try_wait().unwrap().is_none();
+    std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let res = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    if !running {
+        // finished within 1.5 s: nothing to interrupt (the outputs are whole)
+        assert!(res.status.success(), "{stderr}");
+        eprintln!("warning: the fit finished before Ctrl-C could be delivered");
+        return;
+    }
+    assert_eq!(res.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("interrupted; no output written"),
+        "{stderr}"
+    );
+    assert_eq!(listing(dir.path()), vec!["big.csv".to_string()]);
+}

@@ -99,7 +99,7 @@ fn bench(c: &mut Criterion) {
     });
     g.sample_size(10).measurement_time(Duration::from_secs(20));
     g.bench_function("default_fit_generalised_5x200", |b| {
-        b.iter(|| identify(&d, &FitPlan::new(ModelKind::Generalised), &|| {}).unwrap())
+        b.iter(|| identify(&d, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap())
     });
     // the clamped-clamped beam (real data), if the shared data are present
     let beam = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -107,7 +107,7 @@ fn bench(c: &mut Criterion) {
     if let Ok(d) = read_beam(&beam) {
         for kind in [ModelKind::Duffing, ModelKind::Generalised] {
             g.bench_function(format!("default_fit_beam_24C_{kind}"), |b| {
-                b.iter(|| identify(&d, &FitPlan::new(kind), &|| {}).unwrap())
+                b.iter(|| identify(&d, &FitPlan::new(kind), &|_| {}).unwrap())
             });
         }
     }
@@ -115,7 +115,7 @@ fn bench(c: &mut Criterion) {
     let big = data(&th, 10, 100_000);
     g.sample_size(10).measurement_time(Duration::from_secs(60));
     g.bench_function("default_fit_generalised_1e6_rows", |b| {
-        b.iter(|| identify(&big, &FitPlan::new(ModelKind::Generalised), &|| {}).unwrap())
+        b.iter(|| identify(&big, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap())
     });
     g.finish();
 }

@@ -171,7 +171,7 @@
 //!     }
 //! }
 //! let data = Dataset::from_records(&records)?;
-//! let id = identify(&data, &FitPlan::new(ModelKind::DuffingQuadratic), &|| {})?;
+//! let id = identify(&data, &FitPlan::new(ModelKind::DuffingQuadratic), &|_| {})?;
 //! let fitted = id.fit.model();
 //! assert!((fitted.beta / truth.normalised()?.beta - 1.0).abs() < 1e-3);
 //! # Ok::<(), Box<dyn std::error::Error>>(())

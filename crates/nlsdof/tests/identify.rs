@@ -287,7 +287,7 @@ fn default_fit_recovers_duffing_quadratic_with_jumps() {
         &[SweepDirection::Up, SweepDirection::Down],
         None,
     );
-    let r = identify(&d, &FitPlan::new(ModelKind::DuffingQuadratic), &|| {}).unwrap();
+    let r = identify(&d, &FitPlan::new(ModelKind::DuffingQuadratic), &|_| {}).unwrap();
     assert!(!r.fit.levels.is_empty());
     for j in [ALPHA, DELTA, BETA, KAPPA] {
         assert!(
@@ -298,7 +298,7 @@ fn default_fit_recovers_duffing_quadratic_with_jumps() {
         );
     }
     // and the generalised model finds the exponents
-    let r = identify(&d, &FitPlan::new(ModelKind::Generalised), &|| {}).unwrap();
+    let r = identify(&d, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap();
     assert!((r.fit.theta[RHO] - 2.0).abs() < 1e-4, "{:?}", r.fit.theta);
     assert!((r.fit.theta[ETA] - 1.0).abs() < 1e-4, "{:?}", r.fit.theta);
 }
@@ -317,7 +317,7 @@ fn default_fit_chooses_softening_from_the_data() {
         &[SweepDirection::Up, SweepDirection::Down],
         None,
     );
-    let r = identify(&d, &FitPlan::new(ModelKind::GeneralisedStiffness), &|| {}).unwrap();
+    let r = identify(&d, &FitPlan::new(ModelKind::GeneralisedStiffness), &|_| {}).unwrap();
     assert!(r.fit.theta[BETA] < 0.0);
     assert!((r.fit.theta[RHO] - 1.0).abs() < 1e-4, "{:?}", r.fit.theta);
     assert!(rel(r.fit.theta[ALPHA], t[ALPHA]) < 1e-6);
@@ -337,7 +337,7 @@ fn a_fit_stopped_early_says_so() {
     let mut plan = FitPlan::new(ModelKind::Generalised);
     plan.lm.max_iterations = 1;
     plan.grid = (5, 5); // coarse: the start is far from the optimum
-    let r = identify(&d, &plan, &|| {}).unwrap();
+    let r = identify(&d, &plan, &|_| {}).unwrap();
     assert!(!r.fit.converged);
     assert!(!r.fit.intervals_valid());
     let w = r.fit.warning().unwrap();
@@ -360,7 +360,7 @@ fn bad_input_is_a_typed_error() {
         })
         .collect();
     let d = Dataset::from_records(&recs).unwrap();
-    let e = identify(&d, &FitPlan::new(ModelKind::Duffing), &|| {}).unwrap_err();
+    let e = identify(&d, &FitPlan::new(ModelKind::Duffing), &|_| {}).unwrap_err();
     assert!(e.to_string().contains("cannot separate"), "{e}");
     // phase outside [-2 pi, 2 pi]
     let mut d = data(
@@ -372,7 +372,7 @@ fn bad_input_is_a_typed_error() {
         Some((1.0, 0.0)),
     );
     d.curves[0].phases.as_mut().unwrap()[3] = 10.0;
-    let e = identify(&d, &FitPlan::new(ModelKind::Duffing), &|| {}).unwrap_err();
+    let e = identify(&d, &FitPlan::new(ModelKind::Duffing), &|_| {}).unwrap_err();
     assert!(e.to_string().contains("phase"), "{e}");
     // NaN phase is rejected when the data are built
     let recs = vec![Record {
@@ -392,7 +392,7 @@ fn bad_input_is_a_typed_error() {
     let mut plan = FitPlan::new(ModelKind::Duffing);
     plan.phase_weight = f64::NAN;
     assert!(matches!(
-        identify(&d, &plan, &|| {}),
+        identify(&d, &plan, &|_| {}),
         Err(IdentifyError::BadPhaseWeight(_))
     ));
 }
@@ -402,7 +402,42 @@ fn bad_input_is_a_typed_error() {
 #[test]
 fn suite_generator_case_with_phase_fits() {
     let c = support::synthetic::case(7);
-    let r = identify(&c.data, &FitPlan::new(ModelKind::Generalised), &|| {}).unwrap();
+    let r = identify(&c.data, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap();
     assert!(r.phase.is_some());
     assert!(rel(r.fit.theta[ALPHA], c.truth[ALPHA]) < 5e-3);
+}
+
+/// The staged fit reports its stages in order, each announcing how many
+/// steps it reports: one per landscape row, one per output-error start.
+#[test]
+fn identify_reports_its_stages() {
+    use std::sync::Mutex;
+    let d = data(
+        &duffing_quadratic(),
+        &[0.5, 1.0, 2.0],
+        (8.0, 14.0),
+        60,
+        &[SweepDirection::Up, SweepDirection::Down],
+        None,
+    );
+    let events = Mutex::new(Vec::new());
+    let plan = FitPlan::new(ModelKind::Generalised)
+        .with_grid(9, 7)
+        .unwrap();
+    identify(&d, &plan, &|p| events.lock().unwrap().push(p)).unwrap();
+    let events = events.into_inner().unwrap();
+    // split into stages: (name, announced, reported)
+    let mut stages: Vec<(&str, usize, usize)> = Vec::new();
+    for e in &events {
+        match *e {
+            IdentifyProgress::Stage { name, steps } => stages.push((name, steps, 0)),
+            IdentifyProgress::Step => stages.last_mut().expect("a step before any stage").2 += 1,
+        }
+    }
+    assert_eq!(stages[0], ("landscape", 7, 7), "{stages:?}");
+    assert_eq!(stages[1].0, "output error", "{stages:?}");
+    assert!(stages[1].2 >= 1 && stages[1].2 <= stages[1].1, "{stages:?}");
+    for (name, announced, reported) in &stages[2..] {
+        assert!(reported <= announced, "{name}: {reported} of {announced}");
+    }
 }

@@ -47,7 +47,7 @@ fn run(c: &Case, weighting: Weighting) -> Outcome {
     let t = &c.truth;
     let (sd_rho, sd_eta) = exponent_crlb(c).unwrap_or((f64::INFINITY, f64::INFINITY));
     let informative = 1.96 * sd_rho <= 0.1 && 1.96 * sd_eta <= 0.1;
-    let res = match identify(&c.data, &plan, &|| {}) {
+    let res = match identify(&c.data, &plan, &|_| {}) {
         Ok(r) => r,
         Err(e) => {
             return Outcome {

@@ -92,7 +92,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                     }
                 }
             }
-            let id = nlsdof::identification::identify(&data, &plan, &|| {})
+            let id = nlsdof::identification::identify(&data, &plan, &|_| {})
                 .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
             results.push((id.data, id.fit));
             continue;

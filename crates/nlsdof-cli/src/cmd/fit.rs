@@ -1022,8 +1022,8 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         Some(p) => Some(super::landscape_plot::kind_of(p)?),
     };
     let data = args.data.load()?;
-    let pb = progress_bar(plan.refine * plan.starts.max(1), kind.name());
-    let id = identify(&data, &plan, &|| pb.inc(1));
+    let (pb, on_progress) = super::progress::stage_bar(kind.name());
+    let id = identify(&data, &plan, &on_progress);
     pb.finish_and_clear();
     let id = id.map_err(|e| CliError::Usage(e.to_string()))?;
     let res = &id.fit;

@@ -980,5 +980,5 @@ fn staged_fit(
     // noise has an absolute part, and the report compares every fit's Eq 31
     // cost with the truth's.
     plan.weighting = crate::identification::Weighting::Absolute;
-    crate::identification::identify(data, &plan, &|| {})
+    crate::identification::identify(data, &plan, &|_| {})
 }

@@ -52,7 +52,7 @@ use super::equation_error::{
     Prepared, Terms,
 };
 use super::landscape::{
-    landscape, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval,
+    landscape_with_progress, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval,
 };
 use super::levenberg_marquardt::LmOptions;
 use super::models::*;
@@ -302,6 +302,18 @@ pub struct Candidate {
     pub oe: Result<f64, String>,
 }
 
+/// Progress of [`identify`], for a progress bar: each stage announces
+/// itself with the number of steps it will report, then reports them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IdentifyProgress {
+    /// A stage begins: `"landscape"` (one step per row of the exponent
+    /// grid), `"output error"` (one step per refined start), `"judging on
+    /// all points"` (one step).
+    Stage { name: &'static str, steps: usize },
+    /// One step of the current stage is done.
+    Step,
+}
+
 /// The outcome of [`identify`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Identification {
@@ -386,8 +398,9 @@ fn exponent_axis(
 pub fn identify(
     data: &Dataset,
     plan: &FitPlan,
-    progress: &(dyn Fn() + Sync),
+    progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<Identification, IdentifyError> {
+    let step = || progress(IdentifyProgress::Step);
     if !(plan.phase_weight.is_finite() && plan.phase_weight > 0.0) {
         return Err(IdentifyError::BadPhaseWeight(plan.phase_weight));
     }
@@ -468,17 +481,27 @@ pub fn identify(
         gain: gain_fixed,
     };
     // landscape with the gain free (Auto), falling back to gain = 1
-    let land = match landscape(&prep, terms_free, rho_axis, eta_axis, phase_mode) {
-        Ok(l) => l,
-        Err(e) if plan.gain == GainChoice::Auto => {
-            let t = Terms {
-                gain: Some(1.0),
-                ..terms_free
-            };
-            landscape(&prep, t, rho_axis, eta_axis, phase_mode).map_err(|_| e)?
-        }
-        Err(e) => return Err(e.into()),
-    };
+    progress(IdentifyProgress::Stage {
+        name: "landscape",
+        steps: eta_axis.n.max(1),
+    });
+    let land =
+        match landscape_with_progress(&prep, terms_free, rho_axis, eta_axis, phase_mode, &step) {
+            Ok(l) => l,
+            Err(e) if plan.gain == GainChoice::Auto => {
+                let t = Terms {
+                    gain: Some(1.0),
+                    ..terms_free
+                };
+                progress(IdentifyProgress::Stage {
+                    name: "landscape",
+                    steps: eta_axis.n.max(1),
+                });
+                landscape_with_progress(&prep, t, rho_axis, eta_axis, phase_mode, &step)
+                    .map_err(|_| e)?
+            }
+            Err(e) => return Err(e.into()),
+        };
     let (bi, bj) = land
         .best()
         .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
@@ -575,7 +598,12 @@ pub fn identify(
     // number of threads.
     use rayon::prelude::*;
     type Refined = (Candidate, Option<(FitResult, FitSpec, f64)>);
-    let refined: Vec<Result<Refined, IdentifyError>> = candidate_nodes(&land, plan.refine.max(1))
+    let nodes = candidate_nodes(&land, plan.refine.max(1));
+    progress(IdentifyProgress::Stage {
+        name: "output error",
+        steps: nodes.len() * opts.starts,
+    });
+    let refined: Vec<Result<Refined, IdentifyError>> = nodes
         .into_par_iter()
         .filter_map(|(i, j)| land.fit_at(i, j).map(|ee| (i, j, ee)))
         .map(|(i, j, ee)| {
@@ -602,7 +630,7 @@ pub fn identify(
                 &spec,
                 &opts,
                 (jump_weight > 0.0).then_some(jump_weight),
-                progress,
+                &step,
             );
             let oe = match &res {
                 Ok(r) => Ok(r.minima.first().map_or(r.cost, |m| m.cost)),
@@ -658,12 +686,16 @@ pub fn identify(
             for j in spec2.free_indices() {
                 spec2.start[j] = r.theta[j];
             }
+            progress(IdentifyProgress::Stage {
+                name: "output error, best candidate continued",
+                steps: opts.starts,
+            });
             if let Ok(r2) = fit_impl(
                 &refine_data,
                 &spec2,
                 &opts,
                 (jump_weight > 0.0).then_some(jump_weight),
-                progress,
+                &step,
             ) {
                 let c2 = r2.minima.first().map_or(r2.cost, |m| m.cost);
                 if c2 <= *c {
@@ -675,6 +707,10 @@ pub fn identify(
     let (mut fit, spec, _) = best.ok_or(IdentifyError::NoCandidate(last_err))?;
     if polish {
         // judged on every point (with their final weights) at the optimum
+        progress(IdentifyProgress::Stage {
+            name: "judging on all points",
+            steps: 1,
+        });
         let free = spec.free_indices();
         fit = super::assess(
             &fit_data,
@@ -686,6 +722,7 @@ pub fn identify(
             fit.minima.clone(),
             fit.at_bounds.clone(),
         )?;
+        step();
     }
     Ok(Identification {
         fit,

@@ -118,6 +118,19 @@ pub fn landscape(
     eta: Axis,
     phase: LandscapePhase,
 ) -> Result<Landscape, LandscapeError> {
+    landscape_with_progress(prep, terms, rho, eta, phase, &|| {})
+}
+
+/// As [`landscape`], calling `row_done` once per finished η row (from the
+/// worker threads).
+pub fn landscape_with_progress(
+    prep: &Prepared,
+    terms: Terms,
+    rho: Axis,
+    eta: Axis,
+    phase: LandscapePhase,
+    row_done: &(dyn Fn() + Sync),
+) -> Result<Landscape, LandscapeError> {
     if rho.n == 0 || eta.n == 0 {
         return Err(LandscapeError::EmptyGrid {
             n_rho: rho.n,
@@ -140,7 +153,8 @@ pub fn landscape(
         .par_iter()
         .map(|&e| {
             let mut warm: Option<Vec<f64>> = None;
-            rv.iter()
+            let row: Vec<_> = rv
+                .iter()
                 .map(|&r| match phase {
                     LandscapePhase::Ignore => {
                         // LM tolerances of a map: measured on 5 × 200 noisy
@@ -165,7 +179,9 @@ pub fn landscape(
                     LandscapePhase::Known(c) => solve_phase(prep, terms, r, e, Some(c), c.delay),
                     LandscapePhase::Detect { delay } => solve_phase(prep, terms, r, e, None, delay),
                 })
-                .collect()
+                .collect();
+            row_done();
+            row
         })
         .collect();
     let mut cost = Vec::with_capacity(nr * ev.len());

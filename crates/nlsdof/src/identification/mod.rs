@@ -35,8 +35,8 @@ pub mod uncertainty;
 pub use data::{Curve, DataError, Dataset, Record};
 pub use equation_error::{EquationErrorFit, PhaseConvention};
 pub use identify::{
-    identify, FitPlan, GainChoice, Identification, IdentifyError, JumpChoice, PhaseChoice,
-    SignChoice, Weighting,
+    identify, FitPlan, GainChoice, Identification, IdentifyError, IdentifyProgress, JumpChoice,
+    PhaseChoice, SignChoice, Weighting,
 };
 pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};

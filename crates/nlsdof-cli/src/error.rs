@@ -18,7 +18,7 @@ pub enum CliError {
     #[error(transparent)]
     Signal(#[from] nlsdof_io::signal_file::SignalFileError),
     #[error(transparent)]
-    Identification(#[from] nlsdof::vector_fitting::IdentificationError),
+    Identification(#[from] nlsdof::vector_fitting::VectorFitError),
     #[error(transparent)]
     SignalProcessing(#[from] nlsdof::signal_processing::SignalError),
     #[error(transparent)]

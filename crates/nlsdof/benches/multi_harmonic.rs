@@ -25,7 +25,7 @@ fn run(h: usize, stability: bool) -> (usize, usize) {
         h,
         2.0 * PI * 8.0,
         2.0 * PI * 16.0,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions {
             stability,
             ..ContinuationOptions::default()

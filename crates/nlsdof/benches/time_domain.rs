@@ -7,7 +7,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nlsdof::identification::time_domain::{
-    fit, output_and_sensitivities, Record, SampleRange, TimeFitOptions,
+    fit_time_domain, output_and_sensitivities, SampleRange, TimeFitOptions, TimeRecord,
 };
 use nlsdof::identification::ModelKind;
 use std::path::PathBuf;
@@ -36,19 +36,21 @@ fn bench(c: &mut Criterion) {
         return;
     };
     let fs = 610.3515625;
-    let rec = Record::new(&u, &y, fs).unwrap();
+    let rec = TimeRecord::new(&u, &y, fs).unwrap();
     let range = SampleRange::new(40650, 105712);
     let mut g = c.benchmark_group("time_domain");
     g.sample_size(10).measurement_time(Duration::from_secs(20));
     g.bench_function("silverbox_duffing_fit_65062", |b| {
         b.iter(|| {
-            let f = fit(&rec, range, ModelKind::Duffing, &TimeFitOptions::default()).unwrap();
+            let f = fit_time_domain(&rec, range, ModelKind::Duffing, &TimeFitOptions::default())
+                .unwrap();
             assert!(f.termination.converged());
             f.rms
         })
     });
     let theta = {
-        let f = fit(&rec, range, ModelKind::Duffing, &TimeFitOptions::default()).unwrap();
+        let f =
+            fit_time_domain(&rec, range, ModelKind::Duffing, &TimeFitOptions::default()).unwrap();
         f.theta
     };
     g.bench_function("silverbox_sensitivities_65062", |b| {

@@ -6,7 +6,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nlsdof::signal_processing::{welch_frf, WelchOptions};
-use nlsdof::vector_fitting::{fit, VfOptions, C64};
+use nlsdof::vector_fitting::{vector_fit, VfOptions, C64};
 use std::f64::consts::PI;
 
 fn ten_mode_frf(noise: f64) -> (Vec<f64>, Vec<C64>) {
@@ -51,10 +51,10 @@ fn bench(c: &mut Criterion) {
         ("vf_1000pts_10pairs_noise1pct", 0.01),
     ] {
         let (w, h) = ten_mode_frf(noise);
-        let r = fit(&w, &h, &opts).unwrap();
+        let r = vector_fit(&w, &h, &opts).unwrap();
         eprintln!("{name}: {} iterations, {}", r.iterations, r.termination);
         c.bench_function(name, |b| {
-            b.iter(|| fit(black_box(&w), black_box(&h), &opts).unwrap())
+            b.iter(|| vector_fit(black_box(&w), black_box(&h), &opts).unwrap())
         });
     }
     let n = 1 << 20;

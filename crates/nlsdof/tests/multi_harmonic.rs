@@ -6,7 +6,7 @@
 //! first-order folds, and convergence in H.
 
 use nlsdof::excitation::Sine;
-use nlsdof::multi_harmonic::backbone::backbone;
+use nlsdof::multi_harmonic::backbone::multi_harmonic_backbone;
 use nlsdof::multi_harmonic::*;
 use nlsdof::simulation::{simulate_excitation, Method, Options, State};
 use nlsdof::*;
@@ -80,10 +80,10 @@ fn jacobian_matches_central_differences() {
             &m,
             1.0,
             h,
-            Settings {
+            HarmonicSettings {
                 samples: Some(512),
                 regularisation: 0.05,
-                ..Settings::default()
+                ..HarmonicSettings::default()
             },
         )
         .unwrap();
@@ -173,9 +173,9 @@ fn one_harmonic_equals_exact_first_order() {
         ),
     ];
     for (name, m, gamma, nus, samples) in cases {
-        let settings = Settings {
+        let settings = HarmonicSettings {
             samples,
-            ..Settings::default()
+            ..HarmonicSettings::default()
         };
         let fr = ForcedResponse::from_normalised(&m, gamma, Formulation::HarmonicBalance).unwrap();
         let mut checked = 0;
@@ -302,7 +302,7 @@ fn hb_solution(
     gamma: f64,
     omega: f64,
     h: usize,
-    settings: Settings,
+    settings: HarmonicSettings,
 ) -> (HbSystem, Vec<f64>) {
     let mut sys = HbSystem::new(m, gamma, h, settings).unwrap();
     let sol = solve_at(&mut sys, omega, StartRoot::Smallest).unwrap();
@@ -315,7 +315,7 @@ fn compare_with_shooting(
     gamma: f64,
     omega: f64,
     h: usize,
-    settings: Settings,
+    settings: HarmonicSettings,
     samples: usize,
 ) -> (f64, f64, f64, f64) {
     let (sys, q) = hb_solution(m, gamma, omega, h, settings);
@@ -352,7 +352,7 @@ fn large_h_matches_periodic_orbit_of_time_integration() {
         40.0,
         d.omega_n() / 3.0,
         25,
-        Settings::default(),
+        HarmonicSettings::default(),
         1024,
     );
     assert!(e1 < 1e-6 && e3 < 1e-4, "duffing {e1:e} {e3:e}");
@@ -368,7 +368,7 @@ fn large_h_matches_periodic_orbit_of_time_integration() {
         1.0,
         1.05 * m.omega_n(),
         25,
-        Settings::default(),
+        HarmonicSettings::default(),
         1024,
     );
     assert!(e1 < 1e-6 && e3 < 1e-4, "rho=0.5 {e1:e} {e3:e}");
@@ -380,7 +380,7 @@ fn large_h_matches_periodic_orbit_of_time_integration() {
         2.0,
         0.9 * m.omega_n(),
         25,
-        Settings::default(),
+        HarmonicSettings::default(),
         1024,
     );
     assert!(e1 < 1e-6 && e3 < 1e-4, "rho=5.5 {e1:e} {e3:e}");
@@ -395,10 +395,10 @@ fn large_h_matches_periodic_orbit_of_time_integration() {
 #[test]
 fn coulomb_with_regularisation_converges_to_time_integration() {
     let m = coulomb();
-    let settings = Settings {
+    let settings = HarmonicSettings {
         regularisation: 1e-3,
         aliasing_tol: 1e-9,
-        ..Settings::default()
+        ..HarmonicSettings::default()
     };
     let omega = 0.8 * m.omega_n();
     let mut e = Vec::new();
@@ -438,11 +438,11 @@ fn convergence_in_harmonics() {
     let d = duffing_strong();
     let gamma = 40.0;
     let omega = d.omega_n() / 3.0;
-    let reference = hb_solution(&d, gamma, omega, 31, Settings::default()).1;
+    let reference = hb_solution(&d, gamma, omega, 31, HarmonicSettings::default()).1;
     let a_ref = harmonic_amplitude(&reference, 1);
     let mut errs = Vec::new();
     for h in [1usize, 3, 5, 7, 9, 11, 13, 15] {
-        let (_, q) = hb_solution(&d, gamma, omega, h, Settings::default());
+        let (_, q) = hb_solution(&d, gamma, omega, h, HarmonicSettings::default());
         let e = (harmonic_amplitude(&q, 1) - a_ref).abs() / a_ref;
         eprintln!("H = {h:2}: first-harmonic rel error {e:.3e}");
         errs.push(e);
@@ -494,7 +494,7 @@ fn hill_multipliers_match_monodromy() {
     cases.push((w, 1.23, ow, from_first_order(15, rw.amplitude, rw.phase)));
     let mut unstable_seen = false;
     for (model, g, om, mut q) in cases {
-        let mut sys = HbSystem::new(&model, g, 15, Settings::default()).unwrap();
+        let mut sys = HbSystem::new(&model, g, 15, HarmonicSettings::default()).unwrap();
         solve_from(&mut sys, om, &mut q).unwrap();
         let fl = hill_floquet_exponents(&mut sys, &q, om).unwrap();
         let s0 = State {
@@ -558,7 +558,7 @@ fn continuation_h1_folds_equal_exact_first_order_folds() {
         1,
         w0,
         w1,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions {
             stability: true,
             ..ContinuationOptions::default()
@@ -620,7 +620,7 @@ fn continuation_many_harmonics_and_in_gamma() {
         9,
         w0,
         w1,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions::default(),
     )
     .unwrap();
@@ -628,7 +628,7 @@ fn continuation_many_harmonics_and_in_gamma() {
     assert_eq!(br.limit_points.len(), 2);
     // each fold: the Jacobian dR/dq is singular there (and not at a regular point)
     let sv_ratio = |p: &BranchPoint| {
-        let mut sys = HbSystem::new(&d, 2.0, 9, Settings::default()).unwrap();
+        let mut sys = HbSystem::new(&d, 2.0, 9, HarmonicSettings::default()).unwrap();
         let n = sys.dim();
         let mut r = vec![0.0; n];
         let mut jac = vec![0.0; n * n];
@@ -655,7 +655,7 @@ fn continuation_many_harmonics_and_in_gamma() {
         5,
         0.2,
         4.0,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions::default(),
     )
     .unwrap();
@@ -663,7 +663,7 @@ fn continuation_many_harmonics_and_in_gamma() {
     let last = bg.points.last().unwrap();
     assert!((last.gamma - 4.0).abs() < 1e-9);
     // the end state solves the balance at gamma = 4
-    let mut sys = HbSystem::new(&d, 4.0, 5, Settings::default()).unwrap();
+    let mut sys = HbSystem::new(&d, 4.0, 5, HarmonicSettings::default()).unwrap();
     let mut r = vec![0.0; sys.dim()];
     sys.residual(&last.coefficients, om, &mut r);
     assert!(r
@@ -707,7 +707,7 @@ fn backbone_matches_exact_period() {
         (duffing_strong(), vec![1e-3, 5e-3, 1e-2, 2e-2], 1e-12),
         (power(5.5, 1e14), vec![1e-3, 5e-3, 1e-2], 1e-10),
     ] {
-        let bb = backbone(&m, 21, &amps, Settings::default()).unwrap();
+        let bb = multi_harmonic_backbone(&m, 21, &amps, HarmonicSettings::default()).unwrap();
         for p in &bb {
             let om = TAU / exact_period(&m, p.max_x);
             let rel = (p.omega - om).abs() / om;
@@ -723,7 +723,7 @@ fn backbone_matches_exact_period() {
     let m = power(0.5, 1e4);
     let amps = [1e-3, 1e-2, 5e-2];
     let errs = |h| -> Vec<f64> {
-        backbone(&m, h, &amps, Settings::default())
+        multi_harmonic_backbone(&m, h, &amps, HarmonicSettings::default())
             .unwrap()
             .iter()
             .map(|p| {
@@ -745,28 +745,28 @@ fn backbone_matches_exact_period() {
 fn bad_input_is_a_typed_error() {
     let d = duffing_strong();
     assert!(matches!(
-        HbSystem::new(&d, 1.0, 0, Settings::default()),
+        HbSystem::new(&d, 1.0, 0, HarmonicSettings::default()),
         Err(MhbError::Harmonics { value: 0, .. })
     ));
     assert!(matches!(
-        HbSystem::new(&d, 1.0, MAX_HARMONICS + 1, Settings::default()),
+        HbSystem::new(&d, 1.0, MAX_HARMONICS + 1, HarmonicSettings::default()),
         Err(MhbError::Harmonics { .. })
     ));
     assert!(matches!(
-        HbSystem::new(&d, -1.0, 3, Settings::default()),
+        HbSystem::new(&d, -1.0, 3, HarmonicSettings::default()),
         Err(MhbError::InvalidValue { name: "gamma", .. })
     ));
     assert!(matches!(
-        HbSystem::new(&d, f64::NAN, 3, Settings::default()),
+        HbSystem::new(&d, f64::NAN, 3, HarmonicSettings::default()),
         Err(MhbError::InvalidValue { .. })
     ));
     assert!(HbSystem::new(
         &d,
         1.0,
         3,
-        Settings {
+        HarmonicSettings {
             samples: Some(8),
-            ..Settings::default()
+            ..HarmonicSettings::default()
         }
     )
     .is_err());
@@ -776,7 +776,7 @@ fn bad_input_is_a_typed_error() {
         3,
         10.0,
         10.0,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions::default()
     )
     .is_err());
@@ -786,13 +786,13 @@ fn bad_input_is_a_typed_error() {
         3,
         f64::NAN,
         10.0,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions::default()
     )
     .is_err());
     // Coulomb sticking: no first-order state to start from
     let c = coulomb();
-    let mut sys = HbSystem::new(&c, 2.0, 3, Settings::default()).unwrap();
+    let mut sys = HbSystem::new(&c, 2.0, 3, HarmonicSettings::default()).unwrap();
     assert!(matches!(
         solve_at(&mut sys, 30.0, StartRoot::Smallest),
         Err(MhbError::NoStart { .. })
@@ -804,10 +804,10 @@ fn bad_input_is_a_typed_error() {
         3,
         2.0 * PI * 8.0,
         2.0 * PI * 16.0,
-        Settings {
+        HarmonicSettings {
             tol: 1e-300,
             max_iterations: 5,
-            ..Settings::default()
+            ..HarmonicSettings::default()
         },
         &ContinuationOptions::default(),
     );
@@ -824,7 +824,7 @@ fn bad_input_is_a_typed_error() {
         kappa: 0.0,
         eta: 0.0,
     };
-    let mut sys = HbSystem::new(&und, 1.0, 3, Settings::default()).unwrap();
+    let mut sys = HbSystem::new(&und, 1.0, 3, HarmonicSettings::default()).unwrap();
     let mut q = from_first_order(3, 1.0, 0.0);
     assert!(sys.solve(&mut q, 10.0).is_err());
 }
@@ -836,10 +836,10 @@ fn coulomb_convergence_experiment() {
     let omega = 0.8 * m.omega_n();
     for reg in [1e-3, 1e-4] {
         for h in [25usize, 50, 100] {
-            let settings = Settings {
+            let settings = HarmonicSettings {
                 regularisation: reg,
                 aliasing_tol: 1e-9,
-                ..Settings::default()
+                ..HarmonicSettings::default()
             };
             let t = std::time::Instant::now();
             compare_with_shooting(
@@ -862,7 +862,8 @@ fn backbone_experiment() {
     let m = power(0.5, 1e4);
     for h in [11usize, 21, 41, 81] {
         let t = std::time::Instant::now();
-        let bb = backbone(&m, h, &[1e-3, 1e-2, 5e-2], Settings::default()).unwrap();
+        let bb = multi_harmonic_backbone(&m, h, &[1e-3, 1e-2, 5e-2], HarmonicSettings::default())
+            .unwrap();
         for p in &bb {
             let om = TAU / exact_period(&m, p.max_x);
             eprintln!(
@@ -895,7 +896,7 @@ fn sweep_h1_equals_first_order_sweep() {
             1,
             &omegas,
             dir,
-            Settings::default(),
+            HarmonicSettings::default(),
             &ContinuationOptions::default(),
         )
         .unwrap();
@@ -942,7 +943,7 @@ fn located_peak_satisfies_first_order_peak_condition_and_study_converges() {
         1,
         w0,
         w1,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions::default(),
     )
     .unwrap();
@@ -961,7 +962,7 @@ fn located_peak_satisfies_first_order_peak_condition_and_study_converges() {
         w1,
         &[1, 3, 5, 7, 9, 11, 15, 21],
         1e-6,
-        Settings::default(),
+        HarmonicSettings::default(),
         &ContinuationOptions::default(),
     )
     .unwrap();
@@ -1001,7 +1002,7 @@ fn upper_fold_matches_stepped_sine_rig_and_first_order_does_not() {
             h,
             0.9,
             1.3,
-            Settings::default(),
+            HarmonicSettings::default(),
             &ContinuationOptions::default(),
         )
         .unwrap();
@@ -1018,7 +1019,7 @@ fn upper_fold_matches_stepped_sine_rig_and_first_order_does_not() {
     let step = gap / 6.0;
     let omegas: Vec<f64> = (0..40).map(|i| f9 - 4.0 * gap + i as f64 * step).collect();
     let w0 = omegas[0];
-    let mut sys = HbSystem::new(&m, gamma, 9, Settings::default()).unwrap();
+    let mut sys = HbSystem::new(&m, gamma, 9, HarmonicSettings::default()).unwrap();
     let sol = solve_at(&mut sys, w0, StartRoot::Largest).unwrap();
     let q = sol.coefficients;
     let start = State {

@@ -5,8 +5,8 @@
 use nlsdof::excitation::{upsample_cubic, SampledInput};
 use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::time_domain::{
-    fit, output_and_sensitivities, predict, simulate_output, Record, SampleRange, TimeFitOptions,
-    TimeModel, N_TIME_PARAMS, TIME_PARAM_NAMES, UPSAMPLE,
+    fit_time_domain, output_and_sensitivities, predict, simulate_output, SampleRange,
+    TimeFitOptions, TimeModel, TimeRecord, N_TIME_PARAMS, TIME_PARAM_NAMES, UPSAMPLE,
 };
 use nlsdof::identification::ModelKind;
 use nlsdof::simulation::{simulate, Method, Options, State};
@@ -161,8 +161,8 @@ fn prediction_equals_the_simulator_on_cubic_input() {
 
 fn check_recovery(kind: ModelKind) {
     let (u, y) = record(kind, 4000, 0.0, 0);
-    let rec = Record::new(&u, &y, FS).unwrap();
-    let f = fit(
+    let rec = TimeRecord::new(&u, &y, FS).unwrap();
+    let f = fit_time_domain(
         &rec,
         SampleRange::new(0, 3000),
         kind,
@@ -212,8 +212,8 @@ fn one_percent_noise_inside_intervals() {
         let mut first_seed_all_inside = true;
         for seed in 1..=8u64 {
             let (u, y) = record(kind, 4000, 0.01, seed);
-            let rec = Record::new(&u, &y, FS).unwrap();
-            let f = fit(
+            let rec = TimeRecord::new(&u, &y, FS).unwrap();
+            let f = fit_time_domain(
                 &rec,
                 SampleRange::new(0, 4000),
                 kind,
@@ -249,7 +249,7 @@ fn bad_input_is_typed() {
     let u = vec![0.0; 100];
     let y = vec![0.0; 99];
     assert!(matches!(
-        Record::new(&u, &y, FS),
+        TimeRecord::new(&u, &y, FS),
         Err(E::LengthMismatch {
             input: 100,
             output: 99
@@ -258,16 +258,16 @@ fn bad_input_is_typed() {
     let mut y = vec![0.0; 100];
     y[7] = f64::NAN;
     assert!(matches!(
-        Record::new(&u, &y, FS),
+        TimeRecord::new(&u, &y, FS),
         Err(E::NonFinite { index: 7, .. })
     ));
     assert!(matches!(
-        Record::new(&u, &u, -1.0),
+        TimeRecord::new(&u, &u, -1.0),
         Err(E::NonPositiveFs { .. })
     ));
-    let rec = Record::new(&u, &u, FS).unwrap();
+    let rec = TimeRecord::new(&u, &u, FS).unwrap();
     assert!(matches!(
-        fit(
+        fit_time_domain(
             &rec,
             SampleRange::new(0, 200),
             ModelKind::Linear,
@@ -276,7 +276,7 @@ fn bad_input_is_typed() {
         Err(E::RangeOutside { end: 200, .. })
     ));
     assert!(matches!(
-        fit(
+        fit_time_domain(
             &rec,
             SampleRange::new(0, 100),
             ModelKind::Coulomb,
@@ -285,7 +285,7 @@ fn bad_input_is_typed() {
         Err(E::UnsupportedModel { .. })
     ));
     assert!(matches!(
-        fit(
+        fit_time_domain(
             &rec,
             SampleRange::new(0, 100),
             ModelKind::Linear,
@@ -299,14 +299,14 @@ fn bad_input_is_typed() {
 fn fit_is_deterministic_for_a_seed() {
     let kind = ModelKind::Generalised;
     let (u, y) = record(kind, 3000, 0.01, 3);
-    let rec = Record::new(&u, &y, FS).unwrap();
+    let rec = TimeRecord::new(&u, &y, FS).unwrap();
     let opts = TimeFitOptions {
         starts: 3,
         seed: 42,
         ..TimeFitOptions::default()
     };
-    let a = fit(&rec, SampleRange::new(0, 3000), kind, &opts).unwrap();
-    let b = fit(&rec, SampleRange::new(0, 3000), kind, &opts).unwrap();
+    let a = fit_time_domain(&rec, SampleRange::new(0, 3000), kind, &opts).unwrap();
+    let b = fit_time_domain(&rec, SampleRange::new(0, 3000), kind, &opts).unwrap();
     assert_eq!(a, b);
 }
 
@@ -330,8 +330,8 @@ fn silverbox_duffing_beats_narx() {
         u.push(f.next().unwrap().trim().parse::<f64>().unwrap());
         y.push(f.next().unwrap().trim().parse::<f64>().unwrap());
     }
-    let rec = Record::new(&u, &y, 610.3515625).unwrap();
-    let f = fit(
+    let rec = TimeRecord::new(&u, &y, 610.3515625).unwrap();
+    let f = fit_time_domain(
         &rec,
         SampleRange::new(40650, 105712),
         ModelKind::Duffing,

@@ -4,8 +4,9 @@
 //! reference, classical single-mode methods and bad input.
 
 use nlsdof::vector_fitting::{
-    circle_fit, dominant_mode, fit, fit_auto, half_power, modal_parameters, sdof_linear_part,
-    IdentificationError, InputKind, MassSource, OutputKind, Termination, VfOptions, C64,
+    circle_fit, dominant_mode, fit_auto, half_power, modal_parameters, sdof_linear_part,
+    vector_fit, InputKind, MassSource, OutputKind, VectorFitError, VectorFitTermination, VfOptions,
+    C64,
 };
 use std::f64::consts::PI;
 
@@ -135,7 +136,7 @@ fn check_noise_free(modes: &[Mode], f0: f64, f1: f64, n: usize) {
         pole_pairs: modes.len(),
         ..Default::default()
     };
-    let r = fit(&w, &h, &opts).unwrap();
+    let r = vector_fit(&w, &h, &opts).unwrap();
     let err = max_pole_error(&r, modes);
     assert!(
         err < 1e-10,
@@ -150,7 +151,7 @@ fn check_noise_free(modes: &[Mode], f0: f64, f1: f64, n: usize) {
         r.relative_rms_error
     );
     assert!(
-        !matches!(r.termination, Termination::MaxIterations { .. }),
+        !matches!(r.termination, VectorFitTermination::MaxIterations { .. }),
         "{:?}",
         r.termination
     );
@@ -200,7 +201,7 @@ fn check_noisy(modes: &[Mode], f0: f64, f1: f64, n: usize, fn_bound: f64, zeta_b
         pole_pairs: modes.len(),
         ..Default::default()
     };
-    let r = fit(&w, &hn, &opts).unwrap();
+    let r = vector_fit(&w, &hn, &opts).unwrap();
     let fm = modal_parameters(&r);
     assert_eq!(fm.len(), modes.len());
     let mut sorted = modes.to_vec();
@@ -301,7 +302,7 @@ fn sdof_linear_part_recovers_table_3() {
             proportional: p == 2,
             ..Default::default()
         };
-        let r = fit(&w, &h, &opts).unwrap();
+        let r = vector_fit(&w, &h, &opts).unwrap();
         let modes = modal_parameters(&r);
         let i = dominant_mode(&modes).unwrap();
         let lp = sdof_linear_part(&modes[i], InputKind::Force, out, None).unwrap();
@@ -317,7 +318,7 @@ fn sdof_linear_part_recovers_table_3() {
         assert!(lp.complexity.abs() < 1e-8);
         // Base acceleration input: x/γ = 1/(s² + δs + α); the mass is not identifiable.
         let ha: Vec<C64> = h.iter().map(|z| z * m).collect();
-        let r = fit(&w, &ha, &opts).unwrap();
+        let r = vector_fit(&w, &ha, &opts).unwrap();
         let modes = modal_parameters(&r);
         let lp = sdof_linear_part(&modes[0], InputKind::Acceleration, out, None).unwrap();
         assert_eq!(lp.mass_source, MassSource::Unidentified);
@@ -376,7 +377,7 @@ fn bad_input_gives_typed_errors_with_values() {
     let w = grid(4.5, 6.0, 10);
     let h = frf(&one_mode(), &w);
     // 3 pole pairs + d: 6 + 1 + 7 = 14 unknowns > 2 x 5 = 10 equations.
-    let e = fit(
+    let e = vector_fit(
         &w[..5],
         &h[..5],
         &VfOptions {
@@ -387,7 +388,7 @@ fn bad_input_gives_typed_errors_with_values() {
     .unwrap_err();
     assert_eq!(
         e,
-        IdentificationError::TooFewPoints {
+        VectorFitError::TooFewPoints {
             points: 5,
             equations: 10,
             unknowns: 14
@@ -396,11 +397,11 @@ fn bad_input_gives_typed_errors_with_values() {
     assert!(e.to_string().contains("14 unknowns"));
     let mut hb = h.clone();
     hb[3] = C64::new(f64::NAN, 1.0);
-    let e = fit(&w, &hb, &VfOptions::default()).unwrap_err();
+    let e = vector_fit(&w, &hb, &VfOptions::default()).unwrap_err();
     assert!(
         matches!(
             e,
-            IdentificationError::NotFinite {
+            VectorFitError::NotFinite {
                 what: "frf",
                 index: 3,
                 ..
@@ -410,10 +411,10 @@ fn bad_input_gives_typed_errors_with_values() {
     );
     let mut wb = w.clone();
     wb[4] = wb[3];
-    let e = fit(&wb, &h, &VfOptions::default()).unwrap_err();
+    let e = vector_fit(&wb, &h, &VfOptions::default()).unwrap_err();
     assert_eq!(
         e,
-        IdentificationError::NotIncreasing {
+        VectorFitError::NotIncreasing {
             index: 4,
             value: w[3],
             previous: w[3]
@@ -422,16 +423,16 @@ fn bad_input_gives_typed_errors_with_values() {
     let mut wb = w.clone();
     wb[0] = f64::INFINITY;
     assert!(matches!(
-        fit(&wb, &h, &VfOptions::default()),
-        Err(IdentificationError::NotFinite {
+        vector_fit(&wb, &h, &VfOptions::default()),
+        Err(VectorFitError::NotFinite {
             what: "frequency",
             index: 0,
             ..
         })
     ));
     assert!(matches!(
-        fit(&w[..9], &h, &VfOptions::default()),
-        Err(IdentificationError::LengthMismatch {
+        vector_fit(&w[..9], &h, &VfOptions::default()),
+        Err(VectorFitError::LengthMismatch {
             frequencies: 9,
             values: 10
         })
@@ -441,14 +442,14 @@ fn bad_input_gives_typed_errors_with_values() {
         ..Default::default()
     };
     assert_eq!(
-        fit(&w, &h, &opts).unwrap_err(),
-        IdentificationError::BadWeight {
+        vector_fit(&w, &h, &opts).unwrap_err(),
+        VectorFitError::BadWeight {
             index: 2,
             value: -2.0
         }
     );
     assert!(matches!(
-        fit(
+        vector_fit(
             &w,
             &h,
             &VfOptions {
@@ -456,7 +457,7 @@ fn bad_input_gives_typed_errors_with_values() {
                 ..Default::default()
             }
         ),
-        Err(IdentificationError::BadOption { .. })
+        Err(VectorFitError::BadOption { .. })
     ));
 }
 
@@ -473,7 +474,7 @@ fn weights_and_log_spacing_also_converge() {
         proportional: true,
         ..Default::default()
     };
-    let r = fit(&w, &h, &opts).unwrap();
+    let r = vector_fit(&w, &h, &opts).unwrap();
     assert!(max_pole_error(&r, &modes) < 1e-10);
 }
 
@@ -523,7 +524,7 @@ fn matches_the_numpy_reference() {
                     rms_tolerance: 0.0,
                     ..Default::default()
                 };
-                let r = fit(&omega, &h, &opts).unwrap();
+                let r = vector_fit(&omega, &h, &opts).unwrap();
                 let poles: Vec<C64> = g("pole_re")
                     .iter()
                     .zip(g("pole_im"))

@@ -4,8 +4,8 @@
 
 use crate::error::CliError;
 use nlsdof::identification::time_domain::{
-    check_ranges, fit, predict, uniform_fs, Prediction, Record, SampleRange, TimeFitOptions,
-    INIT_WINDOW, MAX_EXPONENT, TIME_PARAM_NAMES,
+    check_ranges, fit_time_domain, predict, uniform_fs, Prediction, SampleRange, TimeFitOptions,
+    TimeRecord, INIT_WINDOW, MAX_EXPONENT, TIME_PARAM_NAMES,
 };
 use nlsdof::identification::ModelKind;
 use nlsdof_io::model_file::{model_to_toml, signal_to_toml, SignalMap};
@@ -186,7 +186,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             (fs, t[0])
         }
     };
-    let rec = Record::new(u, y, fs)?;
+    let rec = TimeRecord::new(u, y, fs)?;
     if tests.is_empty() {
         check_ranges(u.len(), range, None)?;
     }
@@ -201,7 +201,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
     opts.lm.max_iterations = a.max_iterations;
     opts.lm.max_evaluations = 3 * a.max_iterations;
     let t_fit = Instant::now();
-    let res = crate::cmd::simulate::with_spinner("fitting", || fit(&rec, range, kind, &opts))?;
+    let res = crate::cmd::simulate::with_spinner("fitting", || {
+        fit_time_domain(&rec, range, kind, &opts)
+    })?;
     let fit_s = t_fit.elapsed().as_secs_f64();
     let tm = res.model();
     let preds: Vec<Prediction> = tests

@@ -80,7 +80,7 @@ e independent standard normal (SplitMix64 + Box-Muller, one stream per channel s
 
 /// Run settings.
 #[derive(Debug, Clone)]
-pub struct Settings {
+pub struct DemoSettings {
     pub seed: u64,
     pub quick: bool,
     pub steps: usize,
@@ -91,7 +91,7 @@ pub struct Settings {
     pub dwell_factor: f64,
 }
 
-impl Settings {
+impl DemoSettings {
     pub fn new(seed: u64, quick: bool, starts: usize, noise_rel: f64, radius: u32) -> Self {
         Self {
             seed,
@@ -279,7 +279,7 @@ pub struct ConfigRun {
 }
 
 pub struct Demo {
-    pub settings: Settings,
+    pub settings: DemoSettings,
     pub runs: Vec<ConfigRun>,
     pub timings: Vec<(String, f64)>,
 }
@@ -296,7 +296,7 @@ pub enum DemoError {
     #[error(transparent)]
     Signal(#[from] crate::signal_processing::SignalError),
     #[error(transparent)]
-    VectorFitting(#[from] crate::vector_fitting::IdentificationError),
+    VectorFitting(#[from] crate::vector_fitting::VectorFitError),
     /// A stage failed (what and why).
     #[error("{0}")]
     Failed(String),
@@ -322,7 +322,7 @@ fn fit_err(what: &str) -> impl Fn(crate::identification::FitError) -> DemoError 
 }
 
 impl Demo {
-    pub fn new(settings: Settings) -> Self {
+    pub fn new(settings: DemoSettings) -> Self {
         Self {
             settings,
             runs: Vec::new(),

@@ -93,7 +93,7 @@ impl Default for DecayOptions {
 
 /// One backbone / damping-curve point.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BackbonePoint {
+pub struct DecayPoint {
     pub amplitude: f64,
     pub f_hz: f64,
     /// `λ = −d ln a / dt`, 1/s.
@@ -123,7 +123,7 @@ pub struct DecayAnalysis {
     /// Envelope and instantaneous frequency over `start..end`.
     pub amplitude: Vec<f64>,
     pub f_hz: Vec<f64>,
-    pub backbone: Vec<BackbonePoint>,
+    pub backbone: Vec<DecayPoint>,
     /// `(α, β, ρ)` of `ω² = α + g(ρ) β a^ρ`.
     pub stiffness: Fitted,
     /// `(δ, κ, η)` of `2λ = δ + g(η) κ (ω a)^η`.
@@ -477,7 +477,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
             sxy += dt * (amplitude[k].ln() - lm);
             sxx += dt * dt;
         }
-        backbone.push(BackbonePoint {
+        backbone.push(DecayPoint {
             amplitude: lm.exp(),
             f_hz: idx.iter().map(|&k| f_hz[k]).sum::<f64>() / m,
             decay_rate: -sxy / sxx,

@@ -449,7 +449,7 @@ impl PrEvaluation {
 /// Evaluates the residuals at θ with the absolute frequency scale `w_abs`
 /// (`W` of the module docs). `Ok(None)` if some level has no
 /// phase-quadrature point (or a singular `∂G/∂y` when `jacobian`).
-pub fn evaluate(
+pub fn evaluate_phase_resonance(
     data: &PrDataset,
     theta: &[f64; N_PARAMS],
     w_abs: f64,
@@ -498,7 +498,7 @@ impl LeastSquares for PrProblem<'_> {
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
         let th = self.map.theta(u);
-        let e = evaluate(self.data, &th, self.w_abs, false).ok()??;
+        let e = evaluate_phase_resonance(self.data, &th, self.w_abs, false).ok()??;
         e.residuals
             .iter()
             .all(|r| r.is_finite())
@@ -507,7 +507,7 @@ impl LeastSquares for PrProblem<'_> {
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.map.theta(u);
-        let e = evaluate(self.data, &th, self.w_abs, true).ok()??;
+        let e = evaluate_phase_resonance(self.data, &th, self.w_abs, true).ok()??;
         let cols = self.map.dtheta_du(&th);
         let jt = e.jacobian.as_ref()?;
         let mut j = Vec::with_capacity(jt.len() * cols.len());
@@ -666,7 +666,7 @@ pub fn fit_phase_resonance(
         .first()
         .ok_or(PrFitError::NoStartEvaluable { model: spec.kind })?;
     let theta = map.theta(&best.result.u);
-    let Some(e) = evaluate(data, &theta, w_abs, true)? else {
+    let Some(e) = evaluate_phase_resonance(data, &theta, w_abs, true)? else {
         // name the first level without a 90° point (or a singular ∂G/∂y)
         let pts = model_points(data, &theta)?;
         let i = pts.iter().position(|p| p.is_none()).unwrap_or(0);

@@ -96,13 +96,8 @@ pub const UPSAMPLE: usize = 4;
 pub const INIT_WINDOW: usize = 50;
 
 /// Index of each entry of θ.
-pub const ALPHA: usize = 0;
-pub const DELTA: usize = 1;
-pub const BETA: usize = 2;
-pub const RHO: usize = 3;
-pub const KAPPA: usize = 4;
-pub const ETA: usize = 5;
-pub const GAIN: usize = 6;
+/// (The first seven are those of the steady-state fits' θ.)
+pub use super::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
 pub const INPUT_OFFSET: usize = 7;
 pub const OUTPUT_OFFSET: usize = 8;
 pub const X0: usize = 9;
@@ -302,14 +297,14 @@ pub fn uniform_fs(t: &[f64], tolerance: f64) -> Result<f64, TimeFitError> {
 
 /// A validated, uniformly sampled input/output record.
 #[derive(Debug, Clone, Copy)]
-pub struct Record<'a> {
+pub struct TimeRecord<'a> {
     pub u: &'a [f64],
     pub y: &'a [f64],
     /// Sampling frequency, Hz.
     pub fs: f64,
 }
 
-impl<'a> Record<'a> {
+impl<'a> TimeRecord<'a> {
     /// Checks equal lengths, finite samples and `fs > 0`.
     pub fn new(u: &'a [f64], y: &'a [f64], fs: f64) -> Result<Self, TimeFitError> {
         if !(fs.is_finite() && fs > 0.0) {
@@ -695,7 +690,7 @@ fn uncertainty_of(
     })
 }
 
-/// Options of [`fit`].
+/// Options of [`fit_time_domain`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimeFitOptions {
     pub lm: LmOptions,
@@ -722,7 +717,7 @@ impl Default for TimeFitOptions {
     }
 }
 
-/// Result of [`fit`].
+/// Result of [`fit_time_domain`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimeFit {
     pub kind: ModelKind,
@@ -943,8 +938,8 @@ fn local_fit(
 
 /// Output-error fit of `kind` to the record over `range` (see the module
 /// docs). Kinds with negative fixed exponents (Coulomb) are refused.
-pub fn fit(
-    record: &Record<'_>,
+pub fn fit_time_domain(
+    record: &TimeRecord<'_>,
     range: SampleRange,
     kind: ModelKind,
     opts: &TimeFitOptions,
@@ -1087,7 +1082,7 @@ pub struct Prediction {
 /// read only at the first [`INIT_WINDOW`] samples, to fit the initial state
 /// (LM over x₀, v₀ with the model fixed).
 pub fn predict(
-    record: &Record<'_>,
+    record: &TimeRecord<'_>,
     range: SampleRange,
     tm: &TimeModel,
 ) -> Result<Prediction, TimeFitError> {

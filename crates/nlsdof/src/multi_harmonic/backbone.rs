@@ -17,7 +17,7 @@
 //! `T(X) = 4 ∫₀^{π/2} X cos θ dθ / √(α X² cos²θ + 2β/(ρ+2) X^{ρ+2} (1 − sin^{ρ+2} θ))`,
 //! against `2π/Ω` at `X = x(0) = Σ a_k`.
 
-use super::system::{HbSystem, Settings};
+use super::system::{HarmonicSettings, HbSystem};
 use super::MhbError;
 use crate::model::NormalisedModel;
 use nalgebra::{DMatrix, DVector};
@@ -37,11 +37,11 @@ pub struct BackbonePoint {
 
 /// Backbone with `h` harmonics at the first-harmonic amplitudes
 /// `amplitudes` (m, > 0).
-pub fn backbone(
+pub fn multi_harmonic_backbone(
     model: &NormalisedModel,
     h: usize,
     amplitudes: &[f64],
-    settings: Settings,
+    settings: HarmonicSettings,
 ) -> Result<Vec<BackbonePoint>, MhbError> {
     let mut cons = *model;
     cons.delta = 0.0;
@@ -99,7 +99,7 @@ fn newton(
     q: &mut [f64],
     omega: &mut f64,
     amp: f64,
-    settings: Settings,
+    settings: HarmonicSettings,
 ) -> Result<(), MhbError> {
     let h = sys.harmonics();
     let n = sys.dim();

@@ -36,7 +36,7 @@
 
 use super::aft::n_coefficients;
 use super::stability::{hill_floquet_exponents, FloquetExponents};
-use super::system::{HbSystem, Settings};
+use super::system::{HarmonicSettings, HbSystem};
 use super::{from_first_order, harmonic_amplitude, max_abs_displacement, MhbError};
 use crate::harmonic_balance::{ForcedResponse, Formulation};
 use crate::model::NormalisedModel;
@@ -325,7 +325,7 @@ pub fn continue_in_omega(
     h: usize,
     omega_start: f64,
     omega_end: f64,
-    settings: Settings,
+    settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<Branch, MhbError> {
     for (name, v) in [("omega_start", omega_start), ("omega_end", omega_end)] {
@@ -368,7 +368,7 @@ pub fn continue_in_gamma(
     h: usize,
     gamma_start: f64,
     gamma_end: f64,
-    settings: Settings,
+    settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<Branch, MhbError> {
     if !(omega.is_finite() && omega > 0.0) {

@@ -5,7 +5,8 @@
 
 use super::sweep::{sweep, MhbSweep};
 use super::{
-    harmonic_amplitude, regularisation_check, ContinuationOptions, HbSystem, MhbError, Settings,
+    harmonic_amplitude, regularisation_check, ContinuationOptions, HarmonicSettings, HbSystem,
+    MhbError,
 };
 use crate::{Model, SweepDirection};
 
@@ -73,10 +74,10 @@ pub fn level_sweeps(
 /// regularisation width is ε_rel = 1e-2 (library default 1e-3): the layer
 /// is resolved with ~10 times fewer samples (a Coulomb sweep through
 /// resonance: 41 s → see docs/multi-harmonic.md).
-pub fn settings_for(model: &Model) -> Settings {
+pub fn settings_for(model: &Model) -> HarmonicSettings {
     let negative = model.nonlinear_stiffness.is_some_and(|t| t.exponent < 0.0)
         || model.nonlinear_damping.is_some_and(|t| t.exponent < 0.0);
-    let mut s = Settings::default();
+    let mut s = HarmonicSettings::default();
     if negative {
         s.aliasing_tol = 1e-6;
         s.regularisation = 1e-2;

@@ -41,7 +41,7 @@ pub use continuation::{
 };
 pub use levels::{level_sweeps, settings_for, LevelSweep};
 pub use stability::{hill_floquet_exponents, FloquetExponents};
-pub use system::{HbSystem, Settings, MAX_HARMONICS, MAX_SAMPLES};
+pub use system::{HarmonicSettings, HbSystem, MAX_HARMONICS, MAX_SAMPLES};
 
 use crate::error::{ParameterError, SolveError};
 use crate::harmonic_balance::{ForcedResponse, Formulation};

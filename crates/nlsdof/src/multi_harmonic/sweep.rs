@@ -17,7 +17,7 @@
 
 use super::continuation::{continue_in_omega, BranchPoint, ContinuationOptions};
 use super::stability::hill_floquet_exponents;
-use super::system::{HbSystem, Settings};
+use super::system::{HarmonicSettings, HbSystem};
 use super::{harmonic_amplitude, MhbError};
 use crate::harmonic_balance::{Jump, SweepDirection};
 use crate::model::NormalisedModel;
@@ -87,7 +87,7 @@ pub fn sweep(
     h: usize,
     omegas: &[f64],
     direction: SweepDirection,
-    settings: Settings,
+    settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<MhbSweep, MhbError> {
     if omegas.len() < 2 {

@@ -53,7 +53,7 @@
 //! system (so a continuation follows the branch of one fixed equation):
 //! `ε_v = ε_rel γ/ω_n` for the velocity and `ε_x = ε_rel γ/α` for the
 //! displacement (the velocity and displacement of the static response),
-//! `ε_rel` = [`Settings::regularisation`]. The regularisation error must be
+//! `ε_rel` = [`HarmonicSettings::regularisation`]. The regularisation error must be
 //! checked, not assumed: [`regularisation_check`](super::regularisation_check)
 //! re-solves with `ε/4` and reports the change. The adaptive `N` resolves
 //! the layer of width `ε` automatically.
@@ -70,7 +70,7 @@ pub const MAX_SAMPLES: usize = 1 << 18;
 
 /// Numerical settings of the multi-harmonic balance.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Settings {
+pub struct HarmonicSettings {
     /// Newton converges when `‖R‖∞ ≤ tol · (γ + max_k (α + k²Ω²)|q_k|)` (the
     /// size of the largest linear term); one more Newton step is then taken.
     pub tol: f64,
@@ -84,7 +84,7 @@ pub struct Settings {
     pub regularisation: f64,
 }
 
-impl Default for Settings {
+impl Default for HarmonicSettings {
     fn default() -> Self {
         Self {
             tol: 1e-11,
@@ -140,7 +140,7 @@ pub struct HbSystem {
     pub(crate) model: NormalisedModel,
     pub(crate) gamma: f64,
     pub(crate) h: usize,
-    pub(crate) settings: Settings,
+    pub(crate) settings: HarmonicSettings,
     eps_x: f64,
     eps_v: f64,
     aft: Aft,
@@ -160,7 +160,7 @@ impl HbSystem {
         model: &NormalisedModel,
         gamma: f64,
         h: usize,
-        settings: Settings,
+        settings: HarmonicSettings,
     ) -> Result<Self, MhbError> {
         model.validate()?;
         if h == 0 {

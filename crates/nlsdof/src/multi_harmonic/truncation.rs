@@ -13,7 +13,7 @@
 //! change is given).
 
 use super::continuation::{continue_in_omega, ContinuationOptions};
-use super::system::Settings;
+use super::system::HarmonicSettings;
 use super::{max_abs_displacement, MhbError};
 use crate::model::NormalisedModel;
 
@@ -74,7 +74,7 @@ pub fn truncation_study(
     omega_max: f64,
     harmonics: &[usize],
     tol: f64,
-    settings: Settings,
+    settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<TruncationStudy, MhbError> {
     if !(tol.is_finite() && tol > 0.0) {

@@ -65,15 +65,15 @@
 //! ## Stopping rule
 //!
 //! After iteration `i` the fit stops with
-//! * [`Termination::PolesConverged`] if `max_n |a_n⁽ⁱ⁾ − a_n⁽ⁱ⁻¹⁾| / |a_n⁽ⁱ⁾| ≤ pole_tolerance`,
-//! * [`Termination::ErrorFloor`] if the relative RMS error `≤ 10⁻¹³`
+//! * [`VectorFitTermination::PolesConverged`] if `max_n |a_n⁽ⁱ⁾ − a_n⁽ⁱ⁻¹⁾| / |a_n⁽ⁱ⁾| ≤ pole_tolerance`,
+//! * [`VectorFitTermination::ErrorFloor`] if the relative RMS error `≤ 10⁻¹³`
 //!   (exact rational data),
-//! * [`Termination::Stagnated`] if `i ≥ 3` and the RMS error changed by
+//! * [`VectorFitTermination::Stagnated`] if `i ≥ 3` and the RMS error changed by
 //!   less than `rms_tolerance` (relative) in each of the last two iterations
 //!   (noisy data: the error has reached the noise floor),
-//! * [`Termination::MaxIterations`] after `max_iterations`.
+//! * [`VectorFitTermination::MaxIterations`] after `max_iterations`.
 
-use super::{validate_frf, IdentificationError, C64};
+use super::{validate_frf, VectorFitError, C64};
 use nalgebra::{DMatrix, DVector};
 
 /// Spacing of the starting poles' imaginary parts over the band.
@@ -83,7 +83,7 @@ pub enum Spacing {
     Logarithmic,
 }
 
-/// Options of [`fit`].
+/// Options of [`vector_fit`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct VfOptions {
     /// Number of complex pole pairs `N/2` (>= 1).
@@ -142,7 +142,7 @@ impl PoleTerm {
 
 /// Why the iteration stopped.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Termination {
+pub enum VectorFitTermination {
     /// Largest relative pole change fell to `change <= pole_tolerance`.
     PolesConverged { change: f64 },
     /// Relative RMS error below 1e-13 (exact rational data).
@@ -153,17 +153,19 @@ pub enum Termination {
     MaxIterations { change: f64 },
 }
 
-impl std::fmt::Display for Termination {
+impl std::fmt::Display for VectorFitTermination {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Termination::PolesConverged { change } => {
+            VectorFitTermination::PolesConverged { change } => {
                 write!(f, "poles converged (relative change {change:.2e})")
             }
-            Termination::ErrorFloor => write!(f, "error at round-off floor (exact rational data)"),
-            Termination::Stagnated { change } => {
+            VectorFitTermination::ErrorFloor => {
+                write!(f, "error at round-off floor (exact rational data)")
+            }
+            VectorFitTermination::Stagnated { change } => {
                 write!(f, "RMS error stagnated (relative change {change:.2e})")
             }
-            Termination::MaxIterations { change } => {
+            VectorFitTermination::MaxIterations { change } => {
                 write!(
                     f,
                     "iteration limit reached (last relative pole change {change:.2e})"
@@ -173,7 +175,7 @@ impl std::fmt::Display for Termination {
     }
 }
 
-/// Result of [`fit`] (physical units: poles and residues in rad/s).
+/// Result of [`vector_fit`] (physical units: poles and residues in rad/s).
 #[derive(Debug, Clone, PartialEq)]
 pub struct VfFit {
     /// Poles and residues, sorted by `|Im a|` then `Re a`.
@@ -190,7 +192,7 @@ pub struct VfFit {
     pub rms_error: f64,
     /// `rms_error / sqrt(Σ|H_k|²/N_s)`.
     pub relative_rms_error: f64,
-    pub termination: Termination,
+    pub termination: VectorFitTermination,
     /// Normalisation frequency `ω₀ = max ω`, rad/s.
     pub omega_scale: f64,
 }
@@ -232,10 +234,10 @@ fn unknowns(opts: &VfOptions) -> usize {
     n + opts.constant as usize + opts.proportional as usize + n + 1
 }
 
-fn check_options(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<(), IdentificationError> {
+fn check_options(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<(), VectorFitError> {
     validate_frf(omega, h)?;
     let bad = |name, value: String, reason| {
-        Err(IdentificationError::BadOption {
+        Err(VectorFitError::BadOption {
             name,
             value,
             reason,
@@ -267,7 +269,7 @@ fn check_options(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<(), Ident
     }
     let needed = unknowns(opts);
     if 2 * omega.len() < needed {
-        return Err(IdentificationError::TooFewPoints {
+        return Err(VectorFitError::TooFewPoints {
             points: omega.len(),
             equations: 2 * omega.len(),
             unknowns: needed,
@@ -283,7 +285,7 @@ fn check_options(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<(), Ident
         }
         for (i, &x) in w.iter().enumerate() {
             if !(x.is_finite() && x > 0.0) {
-                return Err(IdentificationError::BadWeight { index: i, value: x });
+                return Err(VectorFitError::BadWeight { index: i, value: x });
             }
         }
     }
@@ -438,7 +440,7 @@ impl Problem<'_> {
         poles: &[C64],
         iteration: usize,
         flip: bool,
-    ) -> Result<Vec<C64>, IdentificationError> {
+    ) -> Result<Vec<C64>, VectorFitError> {
         let ns = self.ns();
         let (phi, n) = basis(&self.s, poles);
         let n1 = n + self.constant as usize + self.proportional as usize;
@@ -481,7 +483,7 @@ impl Problem<'_> {
         m[(n2, n)] = scale * ns as f64;
         let mut rhs = DVector::<f64>::zeros(n2 + 1);
         rhs[n2] = scale * ns as f64;
-        let x = lstsq(m, rhs).ok_or(IdentificationError::Singular {
+        let x = lstsq(m, rhs).ok_or(VectorFitError::Singular {
             iteration,
             what: "pole relocation",
         })?;
@@ -492,7 +494,7 @@ impl Problem<'_> {
             dt = if dt < 0.0 { -1e-8 } else { 1e-8 };
             let m2 = r22.view((0, 0), (n2, n)).into_owned();
             let b2 = -r22.column(n) * dt;
-            let c2 = lstsq(m2, b2).ok_or(IdentificationError::Singular {
+            let c2 = lstsq(m2, b2).ok_or(VectorFitError::Singular {
                 iteration,
                 what: "pole relocation (fixed d̃)",
             })?;
@@ -524,13 +526,13 @@ impl Problem<'_> {
             }
         }
         if !z.iter().all(|v| v.is_finite()) {
-            return Err(IdentificationError::Singular {
+            return Err(VectorFitError::Singular {
                 iteration,
                 what: "zeros of sigma",
             });
         }
         let schur = nalgebra::linalg::Schur::try_new(z, f64::EPSILON, 10_000)
-            .ok_or(IdentificationError::Eigen { iteration })?;
+            .ok_or(VectorFitError::Eigen { iteration })?;
         let eig = schur.complex_eigenvalues();
         let mut out: Vec<C64> = Vec::with_capacity(n);
         let mut count = 0;
@@ -544,7 +546,7 @@ impl Problem<'_> {
             }
         }
         if count != n || out.iter().any(|p| !(p.re.is_finite() && p.im.is_finite())) {
-            return Err(IdentificationError::Eigen { iteration });
+            return Err(VectorFitError::Eigen { iteration });
         }
         if flip {
             for p in out.iter_mut() {
@@ -562,7 +564,7 @@ impl Problem<'_> {
         &self,
         poles: &[C64],
         iteration: usize,
-    ) -> Result<(Vec<PoleTerm>, f64, f64, f64), IdentificationError> {
+    ) -> Result<(Vec<PoleTerm>, f64, f64, f64), VectorFitError> {
         let ns = self.ns();
         let (phi, n) = basis(&self.s, poles);
         let n1 = n + self.constant as usize + self.proportional as usize;
@@ -581,7 +583,7 @@ impl Problem<'_> {
             b[k] = v.re;
             b[ns + k] = v.im;
         }
-        let x = lstsq(a, b).ok_or(IdentificationError::Singular {
+        let x = lstsq(a, b).ok_or(VectorFitError::Singular {
             iteration,
             what: "residue identification",
         })?;
@@ -642,7 +644,7 @@ fn pole_change(old: &[C64], new: &[C64]) -> f64 {
 /// Errors: mismatched lengths, non-finite values, negative or
 /// non-increasing frequencies, bad weights or options, and fewer real
 /// equations (`2 × points`) than unknowns (`2N + [d] + [e] + N + 1`).
-pub fn fit(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<VfFit, IdentificationError> {
+pub fn vector_fit(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<VfFit, VectorFitError> {
     check_options(omega, h, opts)?;
     let ns = omega.len();
     let w0 = omega[ns - 1];
@@ -663,7 +665,7 @@ pub fn fit(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<VfFit, Identifi
     );
     let mut history = Vec::new();
     let mut best: Option<(Vec<PoleTerm>, f64, f64, f64)> = None;
-    let mut termination = Termination::MaxIterations {
+    let mut termination = VectorFitTermination::MaxIterations {
         change: f64::INFINITY,
     };
     let mut iterations = 0;
@@ -675,13 +677,13 @@ pub fn fit(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<VfFit, Identifi
         let (terms, d, e, rms) = prob.residues(&poles, it)?;
         history.push(rms);
         best = Some((terms, d, e, rms));
-        termination = Termination::MaxIterations { change };
+        termination = VectorFitTermination::MaxIterations { change };
         if change <= opts.pole_tolerance {
-            termination = Termination::PolesConverged { change };
+            termination = VectorFitTermination::PolesConverged { change };
             break;
         }
         if rms <= 1e-13 * href {
-            termination = Termination::ErrorFloor;
+            termination = VectorFitTermination::ErrorFloor;
             break;
         }
         if it >= 3 {
@@ -690,7 +692,7 @@ pub fn fit(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<VfFit, Identifi
             };
             let (c1, c2) = (r(it - 1), r(it - 2));
             if c1 <= opts.rms_tolerance && c2 <= opts.rms_tolerance {
-                termination = Termination::Stagnated { change: c1 };
+                termination = VectorFitTermination::Stagnated { change: c1 };
                 break;
             }
         }
@@ -740,9 +742,9 @@ pub fn fit_auto(
     opts: &VfOptions,
     max_pairs: usize,
     improvement: f64,
-) -> Result<AutoOrder, IdentificationError> {
+) -> Result<AutoOrder, VectorFitError> {
     if !(improvement > 0.0 && improvement < 1.0) {
-        return Err(IdentificationError::BadOption {
+        return Err(VectorFitError::BadOption {
             name: "improvement",
             value: format!("{improvement}"),
             reason: "must be in (0, 1)",
@@ -752,7 +754,7 @@ pub fn fit_auto(
     let run = |n: usize| {
         let mut o = opts.clone();
         o.pole_pairs = n;
-        fit(omega, h, &o)
+        vector_fit(omega, h, &o)
     };
     let mut history = Vec::new();
     let mut cur = run(1)?;
@@ -775,8 +777,9 @@ pub fn fit_auto(
             }
             let f = match run(n) {
                 Ok(f) => f,
-                Err(IdentificationError::Eigen { .. })
-                | Err(IdentificationError::Singular { .. }) => continue,
+                Err(VectorFitError::Eigen { .. }) | Err(VectorFitError::Singular { .. }) => {
+                    continue
+                }
                 Err(e) => return Err(e),
             };
             history.push((n, f.rms_error));

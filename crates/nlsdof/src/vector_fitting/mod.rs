@@ -32,7 +32,9 @@ pub mod modal;
 pub mod sdof;
 pub mod simple;
 
-pub use frvf::{fit, fit_auto, AutoOrder, PoleTerm, Spacing, Termination, VfFit, VfOptions};
+pub use frvf::{
+    fit_auto, vector_fit, AutoOrder, PoleTerm, Spacing, VectorFitTermination, VfFit, VfOptions,
+};
 pub use modal::{
     dominant_mode, modal_parameters, sdof_linear_part, InputKind, LinearPart, MassSource,
     ModalParameters, OutputKind,
@@ -50,7 +52,7 @@ use thiserror::Error;
 
 /// Errors of FRF fitting. Each carries the offending values.
 #[derive(Debug, Clone, PartialEq, Error)]
-pub enum IdentificationError {
+pub enum VectorFitError {
     #[error("{frequencies} frequencies but {values} FRF values: lengths must match")]
     LengthMismatch { frequencies: usize, values: usize },
     #[error("too few points: {points} complex samples give {equations} real equations, fewer than the {unknowns} unknowns of the requested model")]
@@ -96,26 +98,26 @@ pub enum IdentificationError {
 
 /// Validates an FRF: equal lengths, finite values, frequencies `>= 0` and
 /// strictly increasing.
-pub(crate) fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), IdentificationError> {
+pub(crate) fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), VectorFitError> {
     if omega.len() != h.len() {
-        return Err(IdentificationError::LengthMismatch {
+        return Err(VectorFitError::LengthMismatch {
             frequencies: omega.len(),
             values: h.len(),
         });
     }
     for (i, &w) in omega.iter().enumerate() {
         if !w.is_finite() {
-            return Err(IdentificationError::NotFinite {
+            return Err(VectorFitError::NotFinite {
                 what: "frequency",
                 index: i,
                 value: format!("{w}"),
             });
         }
         if w < 0.0 {
-            return Err(IdentificationError::NegativeFrequency { index: i, value: w });
+            return Err(VectorFitError::NegativeFrequency { index: i, value: w });
         }
         if i > 0 && w <= omega[i - 1] {
-            return Err(IdentificationError::NotIncreasing {
+            return Err(VectorFitError::NotIncreasing {
                 index: i,
                 value: w,
                 previous: omega[i - 1],
@@ -124,7 +126,7 @@ pub(crate) fn validate_frf(omega: &[f64], h: &[C64]) -> Result<(), Identificatio
     }
     for (i, z) in h.iter().enumerate() {
         if !(z.re.is_finite() && z.im.is_finite()) {
-            return Err(IdentificationError::NotFinite {
+            return Err(VectorFitError::NotFinite {
                 what: "frf",
                 index: i,
                 value: format!("{}{:+}j", z.re, z.im),

@@ -25,7 +25,7 @@
 //!   identifiable** from the FRF: `m, k, c` are given only when a known mass
 //!   is supplied, otherwise only `α` and `δ`.
 
-use super::{IdentificationError, VfFit, C64};
+use super::{VectorFitError, VfFit, C64};
 
 /// Modal parameters of one pole pair (physical units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,13 +71,13 @@ pub fn modal_parameters(fit: &VfFit) -> Vec<ModalParameters> {
 }
 
 /// Index (into [`modal_parameters`]) of the mode with the largest peak.
-pub fn dominant_mode(modes: &[ModalParameters]) -> Result<usize, IdentificationError> {
+pub fn dominant_mode(modes: &[ModalParameters]) -> Result<usize, VectorFitError> {
     modes
         .iter()
         .enumerate()
         .max_by(|a, b| a.1.peak.partial_cmp(&b.1.peak).unwrap())
         .map(|(i, _)| i)
-        .ok_or(IdentificationError::NoMode)
+        .ok_or(VectorFitError::NoMode)
 }
 
 /// The excitation quantity of the FRF.
@@ -145,10 +145,10 @@ pub fn sdof_linear_part(
     input: InputKind,
     output: OutputKind,
     known_mass: Option<f64>,
-) -> Result<LinearPart, IdentificationError> {
+) -> Result<LinearPart, VectorFitError> {
     if let Some(m) = known_mass {
         if !(m.is_finite() && m > 0.0) {
-            return Err(IdentificationError::BadOption {
+            return Err(VectorFitError::BadOption {
                 name: "mass",
                 value: format!("{m}"),
                 reason: "must be finite and > 0 kg",

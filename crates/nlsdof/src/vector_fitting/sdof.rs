@@ -27,9 +27,9 @@
 //! ```
 
 use super::{
-    circle_fit, dominant_mode, fit, fit_auto, half_power, modal_parameters, sdof_linear_part,
-    CircleFit, HalfPower, IdentificationError, InputKind, LinearPart, MassSource, ModalParameters,
-    OutputKind, VfFit, VfOptions, C64,
+    circle_fit, dominant_mode, fit_auto, half_power, modal_parameters, sdof_linear_part, CircleFit,
+    HalfPower, InputKind, LinearPart, MassSource, ModalParameters, OutputKind, VectorFitError,
+    VfFit, VfOptions, C64,
 };
 use thiserror::Error;
 
@@ -141,9 +141,9 @@ pub struct SdofIdentification {
     /// The linear part from vector fitting.
     pub linear: Option<LinearPart>,
     /// Half-power estimate on the mobility.
-    pub half_power: Result<HalfPower, IdentificationError>,
+    pub half_power: Result<HalfPower, VectorFitError>,
     /// Circle fit of the mobility; `None` without the phase.
-    pub circle: Option<Result<CircleFit, IdentificationError>>,
+    pub circle: Option<Result<CircleFit, VectorFitError>>,
     /// From vector fitting, else from the half-power estimate.
     pub sdof: SdofLinear,
 }
@@ -154,9 +154,9 @@ pub enum SdofIdError {
     #[error("no FRF point in [{low}, {high}] rad/s")]
     EmptyBand { low: f64, high: f64 },
     #[error("amplitude-only FRF and the half-power method failed: {0}")]
-    HalfPowerFailed(IdentificationError),
+    HalfPowerFailed(VectorFitError),
     #[error(transparent)]
-    Fit(#[from] IdentificationError),
+    Fit(#[from] VectorFitError),
 }
 
 /// The mobility `H (jω)^(1−p)` of an FRF of output kind `output`.
@@ -232,7 +232,7 @@ pub fn identify_sdof(
                 id.auto_history = a.history;
                 a.fit
             }
-            PoleCount::Fixed(n) => fit(
+            PoleCount::Fixed(n) => super::vector_fit(
                 &id.omega,
                 h,
                 &VfOptions {
@@ -245,7 +245,7 @@ pub fn identify_sdof(
         let chosen = match opts.mode {
             Some(k) if k >= 1 && k <= id.modes.len() => k - 1,
             Some(k) => {
-                return Err(IdentificationError::NoSuchMode {
+                return Err(VectorFitError::NoSuchMode {
                     index: k,
                     count: id.modes.len(),
                 }

@@ -23,7 +23,7 @@
 //!   (averaged over all pairs). The modal constant `1/c` is the diameter
 //!   (`2R`): for a force input `c = 1/(2R)` and `m = c/(2ζω_n)`.
 
-use super::{validate_frf, IdentificationError, C64};
+use super::{validate_frf, VectorFitError, C64};
 use nalgebra::{DMatrix, DVector};
 
 /// Result of [`half_power`] (rad/s).
@@ -40,16 +40,16 @@ pub struct HalfPower {
     pub zeta: f64,
 }
 
-fn check_mag(omega: &[f64], mag: &[f64]) -> Result<(), IdentificationError> {
+fn check_mag(omega: &[f64], mag: &[f64]) -> Result<(), VectorFitError> {
     let h: Vec<C64> = mag.iter().map(|&m| C64::new(m, 0.0)).collect();
     validate_frf(omega, &h)
 }
 
 /// Half-power bandwidth of the largest peak of `mag = |H(ω)|`.
-pub fn half_power(omega: &[f64], mag: &[f64]) -> Result<HalfPower, IdentificationError> {
+pub fn half_power(omega: &[f64], mag: &[f64]) -> Result<HalfPower, VectorFitError> {
     check_mag(omega, mag)?;
     if omega.len() < 3 {
-        return Err(IdentificationError::TooFewPoints {
+        return Err(VectorFitError::TooFewPoints {
             points: omega.len(),
             equations: omega.len(),
             unknowns: 3,
@@ -81,7 +81,7 @@ pub fn half_power(omega: &[f64], mag: &[f64]) -> Result<HalfPower, Identificatio
         }
     }
     let (Some(w1), Some(w2)) = (lo, hi) else {
-        return Err(IdentificationError::BadOption {
+        return Err(VectorFitError::BadOption {
             name: "frequency band",
             value: format!("[{}, {}] rad/s", omega[0], omega[omega.len() - 1]),
             reason: "does not contain both half-power points of the peak",
@@ -112,7 +112,7 @@ pub struct CircleFit {
 }
 
 /// Circle fit of the dominant mode of a **mobility** FRF (see module docs).
-pub fn circle_fit(omega: &[f64], mobility: &[C64]) -> Result<CircleFit, IdentificationError> {
+pub fn circle_fit(omega: &[f64], mobility: &[C64]) -> Result<CircleFit, VectorFitError> {
     validate_frf(omega, mobility)?;
     let mag: Vec<f64> = mobility.iter().map(|z| z.norm()).collect();
     let hp = half_power(omega, &mag)?;
@@ -120,7 +120,7 @@ pub fn circle_fit(omega: &[f64], mobility: &[C64]) -> Result<CircleFit, Identifi
         .filter(|&i| omega[i] >= hp.omega_low && omega[i] <= hp.omega_high)
         .collect();
     if idx.len() < 5 {
-        return Err(IdentificationError::TooFewPoints {
+        return Err(VectorFitError::TooFewPoints {
             points: idx.len(),
             equations: idx.len(),
             unknowns: 5,
@@ -141,7 +141,7 @@ pub fn circle_fit(omega: &[f64], mobility: &[C64]) -> Result<CircleFit, Identifi
     let r = qr.r();
     let sol = r
         .solve_upper_triangular(&qtb.rows(0, 3).into_owned())
-        .ok_or(IdentificationError::Singular {
+        .ok_or(VectorFitError::Singular {
             iteration: 0,
             what: "circle fit",
         })?;
@@ -175,7 +175,7 @@ pub fn circle_fit(omega: &[f64], mobility: &[C64]) -> Result<CircleFit, Identifi
             break;
         }
     }
-    let wn = wn.ok_or(IdentificationError::BadOption {
+    let wn = wn.ok_or(VectorFitError::BadOption {
         name: "circle fit",
         value: format!("{} points", idx.len()),
         reason: "the resonance point is not inside the half-power band",
@@ -200,7 +200,7 @@ pub fn circle_fit(omega: &[f64], mobility: &[C64]) -> Result<CircleFit, Identifi
         }
     }
     if count == 0 {
-        return Err(IdentificationError::TooFewPoints {
+        return Err(VectorFitError::TooFewPoints {
             points: idx.len(),
             equations: 0,
             unknowns: 2,

@@ -26,7 +26,7 @@ mod report;
 mod table;
 
 use crate::error::CliError;
-use nlsdof::demo::{Demo, Settings};
+use nlsdof::demo::{Demo, DemoSettings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -111,7 +111,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     check_out_dir(&args.out, args.force)?;
-    let settings = Settings::new(
+    let settings = DemoSettings::new(
         args.seed,
         args.quick,
         starts,

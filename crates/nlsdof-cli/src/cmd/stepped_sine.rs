@@ -4,7 +4,7 @@
 
 use super::simulate::{load_model, Progress};
 use crate::error::CliError;
-use nlsdof::stepped_sine::{run_sweeps, RigOptions, RigSweep};
+use nlsdof::stepped_sine::{run_sweeps, RigOptions, RigSweep, INTEGRATION_WARNING};
 use nlsdof::SweepDirection;
 use nlsdof_io::signal_file::CsvWriter;
 use serde_json::json;
@@ -259,6 +259,24 @@ pub fn run(a: Args) -> Result<(), CliError> {
             a.max_cycles
         );
     }
+    // the largest estimated integration error (RK4 with N and 2N steps
+    // per cycle, stepped_sine module docs) and where it occurred
+    let worst = sweeps
+        .iter()
+        .flat_map(|(_, s)| s.points.iter())
+        .max_by(|p, q| p.integration_error.total_cmp(&q.integration_error));
+    let integration_error = worst.map_or(0.0, |p| p.integration_error);
+    let integration_warning = (integration_error > INTEGRATION_WARNING).then(|| {
+        format!(
+            "the estimated integration error reaches {:.2e} of the amplitude (at {:.4} Hz): raise --samples-per-cycle (now {}; the error falls as its 4th power)",
+            integration_error,
+            worst.map_or(0.0, |p| p.omega / TAU),
+            a.samples_per_cycle
+        )
+    });
+    if let Some(w) = &integration_warning {
+        eprintln!("nlsdof: warning: {w}");
+    }
     let cycles: usize = sweeps
         .iter()
         .flat_map(|(_, s)| s.points.iter().map(|p| p.cycles))
@@ -281,7 +299,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
             .collect();
         println!(
             "{}",
-            json!({"out": a.out, "levels": levels, "steps": n, "cycles": cycles, "simulated_s": simulated, "wall_s": sim_s, "total_s": t_start.elapsed().as_secs_f64()})
+            json!({"out": a.out, "levels": levels, "steps": n, "cycles": cycles, "simulated_s": simulated, "wall_s": sim_s, "total_s": t_start.elapsed().as_secs_f64(),
+                   "integration_error": {"estimate": integration_error, "warning": integration_warning}})
         );
     } else {
         for (k, s) in &sweeps {

@@ -19,13 +19,13 @@ fn hz(w: f64) -> f64 {
 }
 
 /// Model amplitudes of θ on `data` (phases as in `like`, converted).
-fn judge(data: &Dataset, theta: &[f64; N_PARAMS]) -> (Vec<Vec<f64>>, Vec<Option<f64>>) {
+fn judge(data: &Dataset, theta: &Parameters) -> (Vec<Vec<f64>>, Vec<Option<f64>>) {
     let amps = objective::model_amplitudes(data, theta).unwrap_or_default();
     let jumps = predicted_jumps(data, theta).unwrap_or_default();
     (amps, jumps)
 }
 
-fn table(data: &Dataset, theta: &[f64; N_PARAMS], out: &mut String) {
+fn table(data: &Dataset, theta: &Parameters, out: &mut String) {
     use std::fmt::Write;
     let (amps, jumps) = judge(data, theta);
     writeln!(out, "| level | jump meas. [Hz] | jump model [Hz] | diff [%] | peak meas. [mm] | peak model [mm] | diff [%] | RMS [mm] |").ok();

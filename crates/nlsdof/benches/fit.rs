@@ -13,7 +13,7 @@ use std::time::Duration;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
-fn data(theta: &[f64; N_PARAMS]) -> Dataset {
+fn data(theta: &Parameters) -> Dataset {
     let gammas = [0.05, 0.1, 0.2, 0.3, 0.4];
     let mut recs = Vec::new();
     for (l, &g) in gammas.iter().enumerate() {
@@ -38,14 +38,14 @@ fn data(theta: &[f64; N_PARAMS]) -> Dataset {
     d
 }
 
-fn truth() -> [f64; N_PARAMS] {
+fn truth() -> Parameters {
     let wn = TWO_PI * 10.0;
     let rho: f64 = 2.6;
     let eta: f64 = 1.7;
     let a_ref: f64 = 0.01;
     let beta = 0.08 * wn * wn / (nlsdof::power_law::g_unchecked(rho) * a_ref.powf(rho));
     let kappa = 0.8 * 0.02 * wn / (nlsdof::power_law::g_unchecked(eta) * (wn * a_ref).powf(eta));
-    [wn * wn, 0.02 * wn, beta, rho, kappa, eta, 1.0]
+    Parameters::from([wn * wn, 0.02 * wn, beta, rho, kappa, eta, 1.0])
 }
 
 fn bench(c: &mut Criterion) {

@@ -16,18 +16,18 @@ use std::time::Duration;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
-fn truth() -> [f64; N_PARAMS] {
+fn truth() -> Parameters {
     let wn = TWO_PI * 10.0;
     let rho: f64 = 2.6;
     let eta: f64 = 1.7;
     let a_ref: f64 = 0.01;
     let beta = 0.08 * wn * wn / (nlsdof::power_law::g_unchecked(rho) * a_ref.powf(rho));
     let kappa = 0.8 * 0.02 * wn / (nlsdof::power_law::g_unchecked(eta) * (wn * a_ref).powf(eta));
-    [wn * wn, 0.02 * wn, beta, rho, kappa, eta, 1.0]
+    Parameters::from([wn * wn, 0.02 * wn, beta, rho, kappa, eta, 1.0])
 }
 
 /// `levels` × `steps` exact-HB up-sweep points over 8–13 Hz, with phases.
-fn data(theta: &[f64; N_PARAMS], levels: usize, steps: usize) -> Dataset {
+fn data(theta: &Parameters, levels: usize, steps: usize) -> Dataset {
     let m = normalised_model(theta);
     let omegas: Vec<f64> = (0..steps)
         .map(|i| TWO_PI * (8.0 + 5.0 * i as f64 / (steps - 1) as f64))

@@ -174,6 +174,12 @@
 //! let id = identify(&data, &FitPlan::new(ModelKind::DuffingQuadratic), &|_| {})?;
 //! let fitted = id.fit.model();
 //! assert!((fitted.beta / truth.normalised()?.beta - 1.0).abs() < 1e-3);
+//! // θ has named fields, and each entry its units and mass scaling
+//! use nlsdof::identification::Parameter;
+//! assert_eq!(id.fit.theta.rho, 2.0); // fixed by the model
+//! let k = id.fit.theta.physical(Parameter::Alpha, truth.mass);
+//! assert_eq!(Parameter::Alpha.info().physical_unit, "N/m");
+//! assert!((k / truth.stiffness - 1.0).abs() < 1e-3);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!

@@ -16,7 +16,7 @@ const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// Synthetic data: `levels` (γ) × steps over [f_lo, f_hi] Hz, exact
 /// harmonic-balance amplitudes of θ, up-sweeps (and down-sweeps if `both`).
 fn synthetic(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     gammas: &[f64],
     f_lo: f64,
     f_hi: f64,
@@ -56,23 +56,23 @@ fn synthetic(
 }
 
 /// A beam-like base: f_n = 10 Hz, ζ = 1 %.
-fn base() -> [f64; N_PARAMS] {
+fn base() -> Parameters {
     let wn = TWO_PI * 10.0;
-    [wn * wn, 2.0 * 0.01 * wn, 0.0, 0.0, 0.0, 0.0, 1.0]
+    Parameters::from([wn * wn, 2.0 * 0.01 * wn, 0.0, 0.0, 0.0, 0.0, 1.0])
 }
 
 /// True parameters for each model kind (moderately nonlinear: the highest
 /// level has a jump for the hardening ones).
-fn truth(kind: ModelKind) -> [f64; N_PARAMS] {
+fn truth(kind: ModelKind) -> Parameters {
     let mut t = base();
     let wn2 = t[ALPHA];
     // response ~ γ/(2ζ wn²) ≈ 0.1·γ/1 m at γ=1 → a ~ 6e-3 m at γ ~ 0.5
     let a_ref: f64 = 0.01;
-    let set_stiff = |t: &mut [f64; N_PARAMS], rho: f64| {
+    let set_stiff = |t: &mut Parameters, rho: f64| {
         t[RHO] = rho;
         t[BETA] = 0.08 * wn2 / (nlsdof::power_law::g_unchecked(rho) * a_ref.powf(rho));
     };
-    let set_damp = |t: &mut [f64; N_PARAMS], eta: f64| {
+    let set_damp = |t: &mut Parameters, eta: f64| {
         t[ETA] = eta;
         let d = t[DELTA];
         t[KAPPA] =
@@ -108,7 +108,7 @@ fn amplitude_derivatives_match_finite_differences() {
     let mut rng = SplitMix64(7);
     let mut checked = 0;
     for _ in 0..40 {
-        let th = [
+        let th = Parameters::from([
             (TWO_PI * (5.0 + 20.0 * rng.next_f64())).powi(2),
             0.5 + 3.0 * rng.next_f64(),
             1e3 * (0.1 + rng.next_f64()) * 10f64.powf(3.0 * rng.next_f64()),
@@ -116,10 +116,10 @@ fn amplitude_derivatives_match_finite_differences() {
             0.05 + rng.next_f64(),
             -0.8 + 3.0 * rng.next_f64(),
             0.5 + rng.next_f64(),
-        ];
+        ]);
         let gamma = 0.2 + 3.0 * rng.next_f64();
         let omega = th[ALPHA].sqrt() * (0.7 + 0.8 * rng.next_f64());
-        let roots = |t: &[f64; N_PARAMS]| {
+        let roots = |t: &Parameters| {
             ForcedResponse::from_normalised(
                 &normalised_model(t),
                 t[GAIN] * gamma,
@@ -513,7 +513,7 @@ fn quadrature_frequency_derivatives_match_finite_differences() {
     let mut rng = SplitMix64(19);
     let mut checked = 0;
     for _ in 0..30 {
-        let th = [
+        let th = Parameters::from([
             (TWO_PI * (5.0 + 20.0 * rng.next_f64())).powi(2),
             0.5 + 3.0 * rng.next_f64(),
             1e3 * (0.1 + rng.next_f64()) * 10f64.powf(3.0 * rng.next_f64()),
@@ -521,7 +521,7 @@ fn quadrature_frequency_derivatives_match_finite_differences() {
             0.05 + rng.next_f64(),
             -0.8 + 3.0 * rng.next_f64(),
             0.5 + rng.next_f64(),
-        ];
+        ]);
         let gamma = 0.2 + 3.0 * rng.next_f64();
         let Some((w0, d)) = quadrature_frequency(&th, gamma).unwrap() else {
             continue;

@@ -20,7 +20,7 @@ const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// Noise-free exact-HB sweeps of θ with phases written as
 /// `ψ = sign·φ + offset`.
 fn data(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     gammas: &[f64],
     f: (f64, f64),
     steps: usize,
@@ -55,9 +55,9 @@ fn data(
 }
 
 /// Duffing + quadratic damping with jumps (f_n = 10 Hz, ζ = 1 %).
-fn duffing_quadratic() -> [f64; N_PARAMS] {
+fn duffing_quadratic() -> Parameters {
     let wn = TWO_PI * 10.0;
-    [wn * wn, 2.0 * 0.01 * wn, 4.0e6, 2.0, 0.05, 1.0, 1.0]
+    Parameters::from([wn * wn, 2.0 * 0.01 * wn, 4.0e6, 2.0, 0.05, 1.0, 1.0])
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -128,7 +128,7 @@ fn equation_error_without_phase_is_exact() {
         (
             {
                 let wn = TWO_PI * 10.0;
-                [wn * wn, 2.0 * 0.01 * wn, -2.0e4, 1.5, 0.1, -1.0, 1.0]
+                Parameters::from([wn * wn, 2.0 * 0.01 * wn, -2.0e4, 1.5, 0.1, -1.0, 1.0])
             },
             ModelKind::Generalised,
         ),
@@ -172,7 +172,7 @@ fn equation_error_without_phase_is_exact() {
 
 #[test]
 fn phase_jacobian_matches_finite_differences() {
-    let t = [3900.0, 1.2, 3.0e6, 2.3, 0.04, 0.7, 1.1];
+    let t = Parameters::from([3900.0, 1.2, 3.0e6, 2.3, 0.04, 0.7, 1.1]);
     let mut d = data(
         &t,
         &[1.0, 2.5],
@@ -187,7 +187,7 @@ fn phase_jacobian_matches_finite_differences() {
             *a *= 1.0 + 0.01 * ((k as f64) * 0.7).sin();
         }
     }
-    let at = |th: &[f64; N_PARAMS]| evaluate_with_phase(&d, th, true, Some(1.0)).unwrap();
+    let at = |th: &Parameters| evaluate_with_phase(&d, th, true, Some(1.0)).unwrap();
     let e = at(&t);
     let jac = e.jacobian.unwrap();
     let n = d.len();
@@ -308,7 +308,7 @@ fn default_fit_recovers_duffing_quadratic_with_jumps() {
 #[test]
 fn default_fit_chooses_softening_from_the_data() {
     let wn = TWO_PI * 10.0;
-    let t = [wn * wn, 2.0 * 0.01 * wn, -3.0e5, 1.0, 0.0, 0.0, 1.0];
+    let t = Parameters::from([wn * wn, 2.0 * 0.01 * wn, -3.0e5, 1.0, 0.0, 0.0, 1.0]);
     let d = data(
         &t,
         &[0.5, 1.0, 1.5],

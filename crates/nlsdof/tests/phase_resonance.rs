@@ -9,6 +9,7 @@ use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::models::*;
 use nlsdof::identification::objective::normalised_model;
 use nlsdof::identification::phase_resonance::*;
+use nlsdof::identification::Parameters;
 use nlsdof::identification::{ModelKind, Sign, SpecError, Status};
 use nlsdof::power_law::g_unchecked;
 
@@ -23,19 +24,19 @@ fn rel(a: f64, b: f64) -> f64 {
 }
 
 /// f_n = 10 Hz, ζ = 1 %.
-fn base() -> [f64; N_PARAMS] {
+fn base() -> Parameters {
     let wn = TWO_PI * 10.0;
-    [wn * wn, 2.0 * 0.01 * wn, 0.0, 0.0, 0.0, 0.0, 1.0]
+    Parameters::from([wn * wn, 2.0 * 0.01 * wn, 0.0, 0.0, 0.0, 0.0, 1.0])
 }
 
 /// True parameters of each model (4 % backbone shift and 80 % extra
 /// damping at 1 cm; softening: −3 %).
-fn truth(kind: ModelKind, sign: Sign) -> [f64; N_PARAMS] {
+fn truth(kind: ModelKind, sign: Sign) -> Parameters {
     let mut t = base();
     let a_ref: f64 = 0.01;
     let wn2 = t[ALPHA];
     let d = t[DELTA];
-    let stiff = |t: &mut [f64; N_PARAMS], rho: f64| {
+    let stiff = |t: &mut Parameters, rho: f64| {
         t[RHO] = rho;
         let k = if sign == Sign::Softening { -0.06 } else { 0.08 };
         t[BETA] = k * wn2 / (g_unchecked(rho) * a_ref.powf(rho));
@@ -45,7 +46,7 @@ fn truth(kind: ModelKind, sign: Sign) -> [f64; N_PARAMS] {
         Term::FreeExponent => stiff(&mut t, 2.6),
         Term::Absent => {}
     }
-    let damp = |t: &mut [f64; N_PARAMS], eta: f64| {
+    let damp = |t: &mut Parameters, eta: f64| {
         t[ETA] = eta;
         t[KAPPA] = 0.8 * d / (g_unchecked(eta) * (TWO_PI * 10.0 * a_ref).powf(eta));
     };
@@ -63,7 +64,7 @@ fn truth(kind: ModelKind, sign: Sign) -> [f64; N_PARAMS] {
 const GAMMAS: [f64; 5] = [0.1, 0.2, 0.35, 0.5, 0.7];
 
 /// Exact harmonic-balance phase-quadrature points of θ at `gammas`.
-fn points(theta: &[f64; N_PARAMS], gammas: &[f64]) -> PrDataset {
+fn points(theta: &Parameters, gammas: &[f64]) -> PrDataset {
     let mut pts = Vec::new();
     for (i, &g) in gammas.iter().enumerate() {
         let r = ForcedResponse::from_normalised(
@@ -166,7 +167,7 @@ fn quadrature_derivatives_match_finite_differences() {
     for trial in 0..40 {
         let wn = TWO_PI * (5.0 + 20.0 * rng.next_f64());
         let softening = trial % 3 == 2;
-        let mut th = [
+        let mut th = Parameters::from([
             wn * wn,
             wn * (0.005 + 0.03 * rng.next_f64()),
             0.0,
@@ -174,7 +175,7 @@ fn quadrature_derivatives_match_finite_differences() {
             0.0,
             -0.8 + 3.0 * rng.next_f64(),
             0.5 + rng.next_f64(),
-        ];
+        ]);
         let gamma = 0.1 + rng.next_f64();
         // coefficients sized at the linear resonance amplitude
         let a0 = th[GAIN] * gamma / (th[DELTA] * wn);

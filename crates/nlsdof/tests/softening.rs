@@ -12,10 +12,10 @@ use nlsdof::identification::*;
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
 /// f_n = 10 Hz, ζ = 1 %, k_eq/k = −6 % at 1 cm (softening Duffing).
-fn truth() -> [f64; N_PARAMS] {
+fn truth() -> Parameters {
     let wn = TWO_PI * 10.0;
     let alpha = wn * wn;
-    [
+    Parameters::from([
         alpha,
         2.0 * 0.01 * wn,
         -0.06 * alpha / (0.75 * 1e-4),
@@ -23,10 +23,10 @@ fn truth() -> [f64; N_PARAMS] {
         0.0,
         0.0,
         1.0,
-    ]
+    ])
 }
 
-fn synthetic(theta: &[f64; N_PARAMS], gammas: &[f64], steps: usize) -> Dataset {
+fn synthetic(theta: &Parameters, gammas: &[f64], steps: usize) -> Dataset {
     let omegas: Vec<f64> = (0..steps)
         .map(|i| TWO_PI * (8.8 + 2.2 * i as f64 / (steps - 1) as f64))
         .collect();

@@ -3,13 +3,14 @@
 //! helpers shared with `nlsdof compare` (data loading, options, reports).
 
 use crate::error::CliError;
-use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA};
+use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN};
 use nlsdof::identification::search::{best_integer_fit, IntegerPair};
 use nlsdof::identification::{
     fit, identify, phase_quadrature_table, predicted_jumps, Dataset, FitOptions, FitPlan,
     FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
     PhaseConvention, SignChoice, Status, Weighting, N_PARAMS, PARAM_NAMES,
 };
+use nlsdof::identification::{Parameter, Parameters};
 use nlsdof::{Model, SweepDirection};
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
 use serde_json::{json, Value};
@@ -565,7 +566,7 @@ pub fn identification_json(id: &Identification) -> Value {
         p.map(|p| json!([p.lower, p.upper]))
     };
     json!({
-        "equation_error": {"theta": id.equation_error.theta, "cost": id.equation_error.cost,
+        "equation_error": {"theta": id.equation_error.theta.to_array(), "cost": id.equation_error.cost,
                             "residuals": id.equation_error.n_residuals},
         "landscape": {"rho": [l.rho.first(), l.rho.last(), l.rho.len()],
                       "eta": [l.eta.first(), l.eta.last(), l.eta.len()],
@@ -698,16 +699,6 @@ pub fn physical(res: &FitResult, m: f64) -> Result<Model, CliError> {
     Ok(res.model().to_physical(m)?)
 }
 
-const PHYS: [(&str, &str); N_PARAMS] = [
-    ("k", "N/m"),
-    ("c", "N s/m"),
-    ("k_r", "N/m^(rho+1)"),
-    ("rho", "-"),
-    ("c_e", "N (s/m)^(eta+1)"),
-    ("eta", "-"),
-    ("gain", "-"),
-];
-
 /// JSON of one fit.
 pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<Value, CliError> {
     let mut params = Vec::new();
@@ -722,7 +713,7 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
                 .position(|n| *n == PARAM_NAMES[j])
                 .map(|k| (u, k))
         });
-        let mass_scaled = matches!(j, ALPHA | DELTA | BETA | KAPPA);
+        let mass_scaled = Parameter::ALL[j].mass_scaled();
         let m = mass.unwrap_or(1.0);
         let phys = |v: f64| if mass_scaled { v * m } else { v };
         params.push(json!({
@@ -731,7 +722,7 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
             "value": res.theta[j],
             "std_error": unc.map(|(u, k)| u.std_errors[k]),
             "ci95": unc.map(|(u, k)| [u.lower[k], u.upper[k]]),
-            "physical": { "name": PHYS[j].0, "unit": PHYS[j].1, "value": phys(res.theta[j]),
+            "physical": { "name": Parameter::ALL[j].info().physical_name, "unit": Parameter::ALL[j].info().physical_unit, "value": phys(res.theta[j]),
                           "ci95": unc.map(|(u, k)| [phys(u.lower[k]), phys(u.upper[k])]) },
         }));
     }
@@ -765,7 +756,7 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
     let minima: Vec<Value> = res
         .minima
         .iter()
-        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta}))
+        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
         .collect();
     let stiffness_sign = (res.status[BETA] != Status::Absent).then(|| {
         if res.theta[BETA] < 0.0 {
@@ -785,7 +776,7 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
         "phase_cost": res.phase_cost,
         "parameters": params,
         "parameter_order": PARAM_NAMES,
-        "theta": res.theta,
+        "theta": res.theta.to_array(),
         "mass": mass,
         "mass_note": if mass.is_none() { Some("no mass given: physical values are per unit mass (m = 1 kg)") } else { None },
         "cost": res.cost,
@@ -806,7 +797,7 @@ pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result
 /// standard error, 95 % interval, physical value) and `f_n`, `zeta`.
 pub fn parameter_table_text(
     s: &mut String,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     status: &[Status; N_PARAMS],
     unc: Option<&nlsdof::identification::uncertainty::Uncertainty>,
     mass: Option<f64>,
@@ -842,7 +833,7 @@ pub fn parameter_table_text(
             ),
             None => ("-".into(), "-".into()),
         };
-        let phys = if matches!(j, ALPHA | DELTA | BETA | KAPPA) {
+        let phys = if Parameter::ALL[j].mass_scaled() {
             theta[j] * m
         } else {
             theta[j]
@@ -855,9 +846,9 @@ pub fn parameter_table_text(
             theta[j],
             se,
             ci,
-            PHYS[j].0,
+            Parameter::ALL[j].info().physical_name,
             phys,
-            PHYS[j].1
+            Parameter::ALL[j].info().physical_unit
         )
         .ok();
     }

@@ -9,10 +9,10 @@ use super::fit::{
 };
 use super::sign::{fit_pr_signed, sign_trials_json, sign_trials_text, SignArg};
 use crate::error::CliError;
-use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN, KAPPA};
+use nlsdof::identification::models::GAIN;
 use nlsdof::identification::phase_resonance::{default_spec, PrDataset, PrFitOptions, PrFitResult};
 use nlsdof::identification::search::best_integer_fit_phase_resonance;
-use nlsdof::identification::{FitSpec, ModelKind, Sign, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof::identification::{FitSpec, ModelKind, Parameter, Sign, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::phase_resonance_data::read_csv;
 use nlsdof_io::stepped_sine_data::{AmplitudeKind, ReadOptions};
 use serde_json::{json, Value};
@@ -51,16 +51,6 @@ fn hz(w: f64) -> f64 {
     w / (2.0 * PI)
 }
 
-const PHYS: [(&str, &str); N_PARAMS] = [
-    ("k", "N/m"),
-    ("c", "N s/m"),
-    ("k_r", "N/m^(rho+1)"),
-    ("rho", "-"),
-    ("c_e", "N (s/m)^(eta+1)"),
-    ("eta", "-"),
-    ("gain", "-"),
-];
-
 fn status_name(s: Status) -> &'static str {
     match s {
         Status::Absent => "absent",
@@ -70,7 +60,7 @@ fn status_name(s: Status) -> &'static str {
 }
 
 fn mass_scaled(j: usize) -> bool {
-    matches!(j, ALPHA | DELTA | BETA | KAPPA)
+    Parameter::ALL[j].mass_scaled()
 }
 
 /// JSON of one phase-resonance fit (same parameter block as sweep fits).
@@ -94,7 +84,7 @@ pub fn pr_json(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> V
             "value": res.theta[j],
             "std_error": unc.map(|(u, k)| u.std_errors[k]),
             "ci95": unc.map(|(u, k)| [u.lower[k], u.upper[k]]),
-            "physical": { "name": PHYS[j].0, "unit": PHYS[j].1, "value": phys(res.theta[j]),
+            "physical": { "name": Parameter::ALL[j].info().physical_name, "unit": Parameter::ALL[j].info().physical_unit, "value": phys(res.theta[j]),
                           "ci95": unc.map(|(u, k)| [phys(u.lower[k]), phys(u.upper[k])]) },
         }));
     }
@@ -114,7 +104,7 @@ pub fn pr_json(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> V
     let minima: Vec<Value> = res
         .minima
         .iter()
-        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta}))
+        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
         .collect();
     json!({
         "data": "phase-resonance",
@@ -122,7 +112,7 @@ pub fn pr_json(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> V
         "stiffness_sign": res.stiffness_sign.name(),
         "parameters": params,
         "parameter_order": PARAM_NAMES,
-        "theta": res.theta,
+        "theta": res.theta.to_array(),
         "mass": mass,
         "mass_note": if mass.is_none() { Some("no mass given: physical values are per unit mass (m = 1 kg)") } else { None },
         "cost": res.cost,

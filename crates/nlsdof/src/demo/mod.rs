@@ -27,9 +27,10 @@ use crate::excitation::{Dwell, LinearChirp, SteppedSine};
 use crate::identification::global::SplitMix64;
 use crate::identification::models::{ETA, RHO};
 use crate::identification::objective::evaluate;
+use crate::identification::Parameters;
 use crate::identification::{
     fit, integer_search, phase_quadrature_table, Dataset, FitOptions, FitResult, FitSpec,
-    ModelKind, PhaseQuadratureRow, Record, Status, N_PARAMS,
+    ModelKind, PhaseQuadratureRow, Record, Status,
 };
 use crate::signal_processing::{welch_frf, Symmetry, WelchOptions, Window};
 use crate::simulation::{simulate_excitation, Method, Options};
@@ -145,8 +146,8 @@ pub fn configs() -> Result<Vec<Config>, DemoError> {
 }
 
 /// θ = (α, δ, β, ρ, κ, η, gain) of a model.
-fn theta_of(m: &NormalisedModel) -> [f64; N_PARAMS] {
-    [m.alpha, m.delta, m.beta, m.rho, m.kappa, m.eta, 1.0]
+fn theta_of(m: &NormalisedModel) -> Parameters {
+    Parameters::from_normalised(m, 1.0)
 }
 
 /// Gaussian generator: SplitMix64 + Box–Muller, one stream per tag.
@@ -270,7 +271,7 @@ pub struct TimeLevel {
 #[derive(Debug, Clone)]
 pub struct ConfigRun {
     pub cfg: Config,
-    pub truth_theta: [f64; N_PARAMS],
+    pub truth_theta: Parameters,
     pub measured: Option<Measured>,
     pub linear: Option<LinearId>,
     pub fits: Vec<FitEntry>,

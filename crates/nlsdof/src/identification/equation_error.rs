@@ -63,8 +63,9 @@
 
 use super::data::Dataset;
 use super::levenberg_marquardt::{minimise, LeastSquares, LmOptions};
-use super::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, N_PARAMS, PARAM_NAMES, RHO};
+use super::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, PARAM_NAMES, RHO};
 use super::objective::Scales;
+use super::parameters::Parameters;
 use crate::power_law::g_unchecked;
 
 /// How the measured phase relates to the model's displacement phase lag φ:
@@ -123,7 +124,7 @@ pub struct Terms {
 #[derive(Debug, Clone, PartialEq)]
 pub struct EquationErrorFit {
     /// θ = (α, δ, β, ρ, κ, η, gain), natural units (β signed).
-    pub theta: [f64; N_PARAMS],
+    pub theta: Parameters,
     /// Sum of squared residuals (see the module docs for their scaling).
     pub cost: f64,
     /// Number of residuals (2 per point with phase, 1 without).
@@ -267,9 +268,9 @@ fn natural(
     delta_s: f64,
     kappa_s: f64,
     gain: f64,
-) -> [f64; N_PARAMS] {
+) -> Parameters {
     let wr = sc.omega_ref;
-    let mut th = [0.0; N_PARAMS];
+    let mut th = Parameters::default();
     th[ALPHA] = alpha_s * wr * wr;
     th[DELTA] = delta_s * wr;
     th[RHO] = rho;
@@ -564,7 +565,7 @@ fn unpack(
     eta: f64,
     gain: f64,
     terms: Terms,
-) -> [f64; N_PARAMS] {
+) -> Parameters {
     let get = |j: usize| cols.iter().position(|&c| c == j).map_or(0.0, |k| x[k]);
     let mut th = natural(
         sc,
@@ -908,7 +909,7 @@ pub fn solve_magnitude_lifted(
     terms: Terms,
     rho: f64,
     eta: f64,
-) -> Option<[f64; N_PARAMS]> {
+) -> Option<Parameters> {
     let prob = Magnitude::new(prep, terms, rho, eta);
     let x = magnitude_lifted_start(prep, terms, &prob.reg)?;
     let (al, be, de, ka, g) = prob.unpack(&x);
@@ -1032,7 +1033,7 @@ pub(crate) fn solve_magnitude_to(
 }
 
 /// Scaled unknowns of a natural θ (for warm starts of [`solve_magnitude`]).
-pub fn scaled_of(prep: &Prepared, terms: Terms, theta: &[f64; N_PARAMS]) -> Vec<f64> {
+pub fn scaled_of(prep: &Prepared, terms: Terms, theta: &Parameters) -> Vec<f64> {
     let sc = &prep.scales;
     let wr = sc.omega_ref;
     let mut x = vec![theta[ALPHA] / (wr * wr)];

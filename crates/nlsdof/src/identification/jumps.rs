@@ -54,6 +54,7 @@ use super::data::Dataset;
 use super::levenberg_marquardt::LeastSquares;
 use super::models::*;
 use super::objective::{evaluate, evaluate_with_jumps, normalised_model, FirstJump, Problem};
+use super::parameters::Parameters;
 use crate::error::SolveError;
 use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 use crate::power_law::g_unchecked;
@@ -100,7 +101,7 @@ pub fn jump_targets(data: &Dataset) -> Vec<JumpTarget> {
 /// `gain·gamma`, and `dΩ_pq/dθ` (module docs). `None` if the curve never
 /// meets the backbone or the 2 × 2 system is singular.
 pub fn quadrature_frequency(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     gamma: f64,
 ) -> Result<Option<(f64, [f64; N_PARAMS])>, SolveError> {
     let r = ForcedResponse::from_normalised(
@@ -180,7 +181,7 @@ pub fn quadrature_frequency(
 /// and `∂F/∂θ /(2a²)` as in the amplitude derivatives. `None` if
 /// `∂F/∂Ω = 0`.
 pub fn fold_frequency_derivatives(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     gamma: f64,
     omega: f64,
     a: f64,
@@ -258,11 +259,7 @@ impl<'a> WithJumps<'a> {
     /// curve's model sweep (its fold frequency) with `dΩ_f/dθ`, or, where
     /// the model sweep does not jump, the phase-quadrature frequency with
     /// its derivative (module docs).
-    pub fn predicted(
-        &self,
-        theta: &[f64; N_PARAMS],
-        t: &JumpTarget,
-    ) -> Option<(f64, [f64; N_PARAMS])> {
+    pub fn predicted(&self, theta: &Parameters, t: &JumpTarget) -> Option<(f64, [f64; N_PARAMS])> {
         let c = &self.problem.data.curves[t.curve];
         let r = ForcedResponse::from_normalised(
             &normalised_model(theta),
@@ -284,7 +281,7 @@ impl<'a> WithJumps<'a> {
     /// already found by its sweep.
     fn predicted_from(
         &self,
-        theta: &[f64; N_PARAMS],
+        theta: &Parameters,
         t: &JumpTarget,
         jump: FirstJump,
     ) -> Option<(f64, [f64; N_PARAMS])> {
@@ -298,7 +295,7 @@ impl<'a> WithJumps<'a> {
     /// Jump residuals and (if `jacobian`) their rows `∂r/∂θ` at θ.
     pub fn jump_residuals(
         &self,
-        theta: &[f64; N_PARAMS],
+        theta: &Parameters,
         jacobian: bool,
     ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
         use rayon::prelude::*;
@@ -315,7 +312,7 @@ impl<'a> WithJumps<'a> {
     /// order), as [`super::objective::evaluate_with_jumps`] returns them.
     fn jump_residuals_from(
         &self,
-        theta: &[f64; N_PARAMS],
+        theta: &Parameters,
         jumps: &[FirstJump],
         jacobian: bool,
     ) -> Option<(Vec<f64>, Vec<[f64; N_PARAMS]>)> {
@@ -363,7 +360,7 @@ impl<'a> WithJumps<'a> {
     }
 
     /// Predicted/measured − 1 per target (for reports).
-    pub fn relative_errors(&self, theta: &[f64; N_PARAMS]) -> Vec<Option<f64>> {
+    pub fn relative_errors(&self, theta: &Parameters) -> Vec<Option<f64>> {
         self.targets
             .iter()
             .map(|t| self.predicted(theta, t).map(|(w, _)| w / t.omega - 1.0))
@@ -415,6 +412,6 @@ impl LeastSquares for WithJumps<'_> {
 }
 
 /// Eq 31 cost alone at θ (for reporting a jump-weighted fit).
-pub fn eq31_cost(data: &Dataset, theta: &[f64; N_PARAMS]) -> Result<f64, SolveError> {
+pub fn eq31_cost(data: &Dataset, theta: &Parameters) -> Result<f64, SolveError> {
     Ok(evaluate(data, theta, false)?.cost())
 }

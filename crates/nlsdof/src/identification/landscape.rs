@@ -411,7 +411,7 @@ mod tests {
                 let c = p0 + a * (r - rho0).powi(2) + b * (e - eta0).powi(2);
                 cost.push(c);
                 fits.push(Some(EquationErrorFit {
-                    theta: [0.0; crate::identification::models::N_PARAMS],
+                    theta: crate::identification::Parameters::default(),
                     cost: c,
                     n_residuals: 1000,
                     n_unknowns: 4,

@@ -3,6 +3,8 @@
 //!
 //! * [`data`] — validated measured curves ([`Dataset`]).
 //! * [`models`] — the model family ([`ModelKind`]) and parameter names.
+//! * [`parameters`] — θ as a struct ([`Parameters`]) with each entry's
+//!   units, mass scaling and default bounds ([`Parameter::info`]).
 //! * [`objective`] — Eq 31 with branch-following model sweeps, the analytic
 //!   Jacobian by implicit differentiation, the optimisation variables.
 //! * [`levenberg_marquardt`] — bounded LM (the local solver).
@@ -27,6 +29,7 @@ pub mod landscape;
 pub mod levenberg_marquardt;
 pub mod models;
 pub mod objective;
+pub mod parameters;
 pub mod phase_resonance;
 pub mod search;
 pub mod time_domain;
@@ -42,6 +45,7 @@ pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};
 pub use models::{ModelKind, N_PARAMS, PARAM_NAMES};
 pub use objective::{FitSpec, Sign, SpecError, Status};
+pub use parameters::{Parameter, Parameters};
 pub use uncertainty::Uncertainty;
 
 use crate::error::SolveError;
@@ -83,7 +87,7 @@ impl Default for FitOptions {
 /// One distinct local minimum of the global search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Minimum {
-    pub theta: [f64; N_PARAMS],
+    pub theta: Parameters,
     pub cost: f64,
     pub termination: Termination,
     pub iterations: usize,
@@ -110,7 +114,7 @@ pub struct FitResult {
     pub kind: ModelKind,
     pub status: [Status; N_PARAMS],
     /// Best θ = (α, δ, β, ρ, κ, η, gain).
-    pub theta: [f64; N_PARAMS],
+    pub theta: Parameters,
     /// Eq 31 cost Σ w ((a_model − a_meas)/γ)² (amplitudes only; the phase
     /// residuals' part of the objective is `phase_cost`).
     pub cost: f64,
@@ -352,7 +356,7 @@ pub(crate) fn assess(
     data: &Dataset,
     spec: &FitSpec,
     free: &[usize],
-    theta: [f64; N_PARAMS],
+    theta: Parameters,
     termination: Termination,
     iterations: usize,
     minima: Vec<Minimum>,
@@ -392,10 +396,7 @@ pub(crate) fn assess(
 /// the model sweep does not jump. The sweep starts as in the objective
 /// (state nearest to the measured first amplitude, see
 /// [`objective::model_amplitudes`]).
-pub fn predicted_jumps(
-    data: &Dataset,
-    theta: &[f64; N_PARAMS],
-) -> Result<Vec<Option<f64>>, SolveError> {
+pub fn predicted_jumps(data: &Dataset, theta: &Parameters) -> Result<Vec<Option<f64>>, SolveError> {
     let model = normalised_model(theta);
     data.curves
         .iter()
@@ -446,7 +447,7 @@ impl PhaseQuadratureRow {
 /// Phase-quadrature table: one row per level (its up-sweep if present).
 pub fn phase_quadrature_table(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
 ) -> Result<Vec<PhaseQuadratureRow>, SolveError> {
     let model = normalised_model(theta);
     let mut rows = Vec::new();

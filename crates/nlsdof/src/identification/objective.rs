@@ -49,6 +49,7 @@
 
 use super::data::Dataset;
 use super::models::*;
+use super::parameters::Parameters;
 use crate::error::SolveError;
 use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 use crate::model::NormalisedModel;
@@ -84,7 +85,7 @@ pub struct FitSpec {
     pub status: [Status; N_PARAMS],
     pub bounds: [(f64, f64); N_PARAMS],
     /// Data-derived start, natural θ (β, κ as true coefficients).
-    pub start: [f64; N_PARAMS],
+    pub start: Parameters,
     pub scales: Scales,
     /// Sign of the fitted nonlinear stiffness β (when β is free).
     pub stiffness_sign: Sign,
@@ -208,7 +209,12 @@ impl FitSpec {
             Status::Absent,
             Status::Fixed(1.0),
         ];
-        let mut start = [alpha0, delta0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        let mut start = Parameters {
+            alpha: alpha0,
+            delta: delta0,
+            gain: 1.0,
+            ..Parameters::default()
+        };
         match kind.stiffness() {
             Term::Absent => {}
             Term::FixedExponent(r) => {
@@ -441,21 +447,14 @@ impl Evaluation {
     }
 }
 
-/// Mass-normalised model of θ.
-pub fn normalised_model(theta: &[f64; N_PARAMS]) -> NormalisedModel {
-    NormalisedModel {
-        alpha: theta[ALPHA],
-        delta: theta[DELTA],
-        beta: theta[BETA],
-        rho: theta[RHO],
-        kappa: theta[KAPPA],
-        eta: theta[ETA],
-    }
+/// Mass-normalised model of θ ([`Parameters::normalised_model`]).
+pub fn normalised_model(theta: &Parameters) -> NormalisedModel {
+    theta.normalised_model()
 }
 
 /// `da/dθ` at a root `a` of the harmonic-balance equation (see module docs).
 pub fn amplitude_derivatives(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     gamma: f64,
     omega: f64,
     a: f64,
@@ -468,7 +467,7 @@ pub fn amplitude_derivatives(
 /// objective evaluation instead of once per step.
 #[derive(Debug, Clone, Copy)]
 pub struct DerivativeConstants {
-    theta: [f64; N_PARAMS],
+    theta: Parameters,
     g_rho: f64,
     dg_rho: f64,
     g_eta: f64,
@@ -476,7 +475,7 @@ pub struct DerivativeConstants {
 }
 
 impl DerivativeConstants {
-    pub fn new(theta: &[f64; N_PARAMS]) -> Self {
+    pub fn new(theta: &Parameters) -> Self {
         let (g_rho, dg_rho) = if theta[BETA] != 0.0 {
             (g_unchecked(theta[RHO]), g_derivative(theta[RHO]))
         } else {
@@ -610,10 +609,7 @@ pub fn first_amplitude(c: &super::data::Curve) -> f64 {
 /// the extreme parameter sets a global search visits. It costs nothing
 /// (no slow-flow integration); where the first step has one stable state
 /// the rule changes nothing.
-pub fn model_amplitudes(
-    data: &Dataset,
-    theta: &[f64; N_PARAMS],
-) -> Result<Vec<Vec<f64>>, SolveError> {
+pub fn model_amplitudes(data: &Dataset, theta: &Parameters) -> Result<Vec<Vec<f64>>, SolveError> {
     Ok(model_response(data, theta)?
         .into_iter()
         .map(|c| c.into_iter().map(|(a, _)| a).collect())
@@ -624,7 +620,7 @@ pub fn model_amplitudes(
 /// `(a, φ)` per step; sticking points give `(0, 0)`.
 pub fn model_response(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
 ) -> Result<Vec<Vec<(f64, f64)>>, SolveError> {
     Ok(model_sweeps(data, theta)?
         .into_iter()
@@ -639,7 +635,7 @@ pub type FirstJump = Option<(f64, f64)>;
 /// the same sweeps (the jump residuals reuse them instead of sweeping again).
 pub fn model_sweeps(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
 ) -> Result<Vec<(Vec<(f64, f64)>, FirstJump)>, SolveError> {
     use rayon::prelude::*;
     let model = normalised_model(theta);
@@ -686,7 +682,7 @@ fn wrap_angle(x: f64) -> f64 {
 /// Evaluates Eq 31's residuals at θ, with the Jacobian if `jacobian`.
 pub fn evaluate(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     jacobian: bool,
 ) -> Result<Evaluation, SolveError> {
     evaluate_with_phase(data, theta, jacobian, None)
@@ -711,7 +707,7 @@ pub fn evaluate(
 /// ```
 pub fn evaluate_with_phase(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     jacobian: bool,
     phase_weight: Option<f64>,
 ) -> Result<Evaluation, SolveError> {
@@ -723,7 +719,7 @@ pub fn evaluate_with_phase(
 /// residuals), from one sweep per curve.
 pub fn evaluate_with_jumps(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     jacobian: bool,
     phase_weight: Option<f64>,
 ) -> Result<(Evaluation, Vec<FirstJump>), SolveError> {
@@ -736,7 +732,7 @@ pub fn evaluate_with_jumps(
 
 fn evaluation_of(
     data: &Dataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     resp: &[Vec<(f64, f64)>],
     jacobian: bool,
     phase_weight: Option<f64>,
@@ -837,8 +833,8 @@ impl<'a> Problem<'a> {
     }
 
     /// θ from u.
-    pub fn theta(&self, u: &[f64]) -> [f64; N_PARAMS] {
-        let mut th = [0.0; N_PARAMS];
+    pub fn theta(&self, u: &[f64]) -> Parameters {
+        let mut th = Parameters::default();
         for j in [ALPHA, DELTA, RHO, ETA, GAIN] {
             let v = self.value_or(j, u);
             th[j] = if self.spec.status[j] == Status::Free && is_log(j) {
@@ -867,7 +863,7 @@ impl<'a> Problem<'a> {
     }
 
     /// u from θ (inverse of [`Self::theta`] on the free entries).
-    pub fn u_of(&self, th: &[f64; N_PARAMS]) -> Vec<f64> {
+    pub fn u_of(&self, th: &Parameters) -> Vec<f64> {
         self.free
             .iter()
             .map(|&j| match j {
@@ -897,7 +893,7 @@ impl<'a> Problem<'a> {
     }
 
     /// `∂θ_j/∂u_k` (7 × n_free, row-major).
-    pub fn dtheta_du(&self, th: &[f64; N_PARAMS]) -> Vec<[f64; N_PARAMS]> {
+    pub fn dtheta_du(&self, th: &Parameters) -> Vec<[f64; N_PARAMS]> {
         // column k for each free k, stored as [f64; 7]
         let mut cols = vec![[0.0; N_PARAMS]; self.free.len()];
         let pos = |j: usize| self.free.iter().position(|&f| f == j);
@@ -923,7 +919,7 @@ impl<'a> Problem<'a> {
 /// stable steady state. (No longer used by the optimiser: such θ are
 /// evaluated with the measured first amplitude selecting the state, see
 /// [`model_amplitudes`].)
-pub fn ambiguous_start(data: &Dataset, theta: &[f64; N_PARAMS]) -> bool {
+pub fn ambiguous_start(data: &Dataset, theta: &Parameters) -> bool {
     let model = normalised_model(theta);
     data.curves.iter().any(|c| {
         let w = match c.direction {
@@ -947,7 +943,7 @@ impl Problem<'_> {
     /// Residuals and `∂r/∂u` (row-major) of an evaluation at `th = θ(u)`.
     pub(crate) fn residuals_and_jacobian_of(
         &self,
-        th: &[f64; N_PARAMS],
+        th: &Parameters,
         e: Evaluation,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
         let cols = self.dtheta_du(th);

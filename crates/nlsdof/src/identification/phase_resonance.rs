@@ -72,6 +72,7 @@ use super::global;
 use super::levenberg_marquardt::{LeastSquares, LmOptions, Termination};
 use super::models::*;
 use super::objective::{normalised_model, FitSpec, Problem, Sign, SpecError, Status};
+use super::parameters::Parameters;
 use super::uncertainty::{self, Uncertainty};
 use super::Minimum;
 use crate::error::SolveError;
@@ -353,7 +354,7 @@ pub fn check_identifiable(spec: &FitSpec, data: &PrDataset) -> Result<(), PrFitE
 /// `gain·γᵢ`), `None` where the response curve never meets the backbone.
 pub fn model_points(
     data: &PrDataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
 ) -> Result<Vec<Option<(f64, f64)>>, SolveError> {
     let model = normalised_model(theta);
     data.points
@@ -374,7 +375,7 @@ pub fn model_points(
 /// docs). `None` where `∂G/∂y` is singular (`E = 0` or
 /// `ρ g(ρ) β a^ρ = −2Ω²`, a vertical backbone of a softening model).
 pub fn quadrature_derivatives(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     gamma: f64,
     omega: f64,
     a: f64,
@@ -451,7 +452,7 @@ impl PrEvaluation {
 /// phase-quadrature point (or a singular `∂G/∂y` when `jacobian`).
 pub fn evaluate_phase_resonance(
     data: &PrDataset,
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     w_abs: f64,
     jacobian: bool,
 ) -> Result<Option<PrEvaluation>, SolveError> {
@@ -576,7 +577,7 @@ pub struct PrFitResult {
     pub status: [Status; N_PARAMS],
     pub stiffness_sign: Sign,
     /// Best θ = (α, δ, β, ρ, κ, η, gain).
-    pub theta: [f64; N_PARAMS],
+    pub theta: Parameters,
     /// Σ (r_a² + r_f²).
     pub cost: f64,
     /// Levels (points); residuals are twice as many.

@@ -3,6 +3,7 @@
 
 use super::levenberg_marquardt::{cholesky_solve, normal_equations};
 use super::models::{N_PARAMS, PARAM_NAMES};
+use super::parameters::Parameters;
 
 /// Standard errors, 95 % intervals and correlations of the free parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,7 +39,7 @@ pub fn t95(dof: usize) -> f64 {
 /// `None` if `JᵀJ` is singular (a parameter is not identifiable from the
 /// data, e.g. ρ → 0 makes β a copy of α) or there are no residual degrees of freedom.
 pub fn uncertainty(
-    theta: &[f64; N_PARAMS],
+    theta: &Parameters,
     free: &[usize],
     jacobian: &[[f64; N_PARAMS]],
     residuals: &[f64],

@@ -5,7 +5,7 @@
 use nlsdof::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::models::*;
-use nlsdof::identification::{Dataset, Record};
+use nlsdof::identification::{Dataset, Parameters, Record};
 use nlsdof::power_law::g_unchecked;
 use nlsdof::NormalisedModel;
 
@@ -15,7 +15,7 @@ pub const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 #[derive(Debug, Clone)]
 pub struct Case {
     pub seed: u64,
-    pub truth: [f64; N_PARAMS],
+    pub truth: Parameters,
     pub data: Dataset,
     /// Noise-free amplitudes, curve by curve (data order).
     pub clean: Vec<Vec<f64>>,
@@ -39,7 +39,7 @@ fn log_uniform(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
     (lo.ln() + (hi.ln() - lo.ln()) * rng.next_f64()).exp()
 }
 
-fn model_of(th: &[f64; N_PARAMS]) -> NormalisedModel {
+fn model_of(th: &Parameters) -> NormalisedModel {
     NormalisedModel {
         alpha: th[ALPHA],
         delta: th[DELTA],
@@ -120,7 +120,7 @@ pub fn case(seed: u64) -> Case {
         let c_k = log_uniform(&mut rng, 1.0, 5.0);
         c_k * delta / (g_unchecked(eta) * (wn * a_lin).powf(eta))
     };
-    let truth = [alpha, delta, beta, rho, kappa, eta, 1.0];
+    let truth = Parameters::from([alpha, delta, beta, rho, kappa, eta, 1.0]);
     let model = model_of(&truth);
     // frequency range: linear half-widths plus the backbone shift at a_lin
     let kq = sign * s_k;

@@ -9,7 +9,7 @@ use nlsdof::demo::{
     SPECTROGRAM_LEVELS,
 };
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
-use nlsdof::identification::{PhaseQuadratureRow, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof::identification::{Parameter, PhaseQuadratureRow, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::atomic::write_atomic;
 use serde_json::{json, Value};
 use std::f64::consts::TAU;
@@ -23,17 +23,6 @@ fn hz(w: f64) -> f64 {
 fn pct(v: Option<f64>) -> String {
     v.map(|x| format!("{x:+.3}")).unwrap_or_else(|| "-".into())
 }
-
-/// Physical name, unit and mass scaling of θ's entries.
-const PHYS: [(&str, &str, bool); N_PARAMS] = [
-    ("k", "N/m", true),
-    ("c", "N s/m", true),
-    ("k_r", "N/m^(rho+1)", true),
-    ("rho", "-", false),
-    ("c_e", "N (s/m)^(eta+1)", true),
-    ("eta", "-", false),
-    ("gain", "-", false),
-];
 
 /// Everything produced by [`write_all`], kept for [`finish`].
 pub struct Written {
@@ -445,7 +434,7 @@ fn png_waterfall(
 }
 
 fn phys(j: usize, v: f64, m: f64) -> f64 {
-    if PHYS[j].2 {
+    if Parameter::ALL[j].mass_scaled() {
         v * m
     } else {
         v
@@ -721,8 +710,8 @@ pub fn build_tables(demo: &Demo) -> Vec<Table> {
                 t.push(vec![
                     run.cfg.key.into(),
                     f.id.into(),
-                    PHYS[j].0.into(),
-                    PHYS[j].1.into(),
+                    Parameter::ALL[j].info().physical_name.into(),
+                    Parameter::ALL[j].info().physical_unit.into(),
                     match r.status[j] {
                         Status::Free => "free".into(),
                         Status::Fixed(_) => "fixed".into(),
@@ -904,7 +893,7 @@ fn fit_json(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Value {
                 "std_error": unc.map(|u| u.2),
                 "ci95": unc.map(|u| [u.0, u.1]),
                 "truth": comparable.then_some(run.truth_theta[j]),
-                "physical": {"name": PHYS[j].0, "unit": PHYS[j].1, "value": phys(j, r.theta[j], mass),
+                "physical": {"name": Parameter::ALL[j].info().physical_name, "unit": Parameter::ALL[j].info().physical_unit, "value": phys(j, r.theta[j], mass),
                              "ci95": unc.map(|u| [phys(j, u.0, mass), phys(j, u.1, mass)]),
                              "truth": comparable.then_some(phys(j, run.truth_theta[j], mass))},
             })
@@ -928,7 +917,7 @@ fn fit_json(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Value {
         "points": r.n_points, "free_parameters": r.n_free,
         "termination": r.termination.name(), "iterations": r.iterations,
         "distinct_minima": r.minima.len(),
-        "theta": r.theta,
+        "theta": r.theta.to_array(),
         "parameters": params,
         "levels": r.levels.iter().map(|l| json!({"level": l.level, "gamma": l.gamma, "rms": l.rms, "rms_normalised": l.rms_normalised})).collect::<Vec<_>>(),
         "integer_pairs": f.integer_table.iter().map(|(r, e, c)| json!({"rho": r, "eta": e,
@@ -953,7 +942,7 @@ fn summary_json(demo: &Demo) -> Value {
                 "name": run.cfg.key,
                 "truth": {"m": tm.mass, "k": tm.stiffness, "c": tm.damping,
                           "k_r": ks.coefficient, "rho": ks.exponent, "c_e": cd.coefficient, "eta": cd.exponent,
-                          "f_n_hz": fnt, "zeta": zt, "theta": run.truth_theta},
+                          "f_n_hz": fnt, "zeta": zt, "theta": run.truth_theta.to_array()},
                 "rig": {
                     "levels": m.sweeps.iter().enumerate().map(|(i, sw)| json!({
                         "gamma_pp": LEVELS_PP[i], "gamma": sw.gamma, "steps": sw.points.len(),

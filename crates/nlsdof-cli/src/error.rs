@@ -18,7 +18,7 @@ pub enum CliError {
     #[error(transparent)]
     Signal(#[from] nlsdof_io::signal_file::SignalFileError),
     #[error(transparent)]
-    Identification(#[from] nlsdof::vector_fitting::VectorFitError),
+    VectorFit(#[from] nlsdof::vector_fitting::VectorFitError),
     #[error(transparent)]
     SignalProcessing(#[from] nlsdof::signal_processing::SignalError),
     #[error(transparent)]
@@ -29,6 +29,8 @@ pub enum CliError {
     Table(#[from] nlsdof_io::table_file::TableError),
     #[error(transparent)]
     TimeFit(#[from] nlsdof::identification::time_domain::TimeFitError),
+    #[error(transparent)]
+    Figure(#[from] nlsdof_figure::FigureError),
     /// A bad command-line value: what was given and what is allowed.
     #[error("{0}")]
     Usage(String),

@@ -3,10 +3,7 @@
 
 mod cmd;
 mod error;
-mod figure;
-mod fonts;
 mod plot;
-mod png;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -108,7 +105,7 @@ fn install_panic_hook() {
 }
 
 fn main() {
-    fonts::register();
+    nlsdof_figure::fonts::register();
     install_panic_hook();
     // SIGINT, SIGTERM and SIGHUP (ctrlc "termination" feature).
     ctrlc::set_handler(|| {

@@ -16,9 +16,9 @@
 //! * the backbone (undamped free-vibration frequency vs amplitude) dotted grey.
 
 use crate::error::CliError;
-use crate::figure::{self, colour, Corner, Panel, Series, Style, GREY};
 use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
 use nlsdof::{backbone, Formulation, LevelResponse, NormalisedModel, SweepDirection};
+use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style, GREY};
 use plotters::prelude::*;
 use std::f64::consts::PI;
 
@@ -132,7 +132,13 @@ fn tick_label(v: f64, span: f64) -> String {
 
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
-    figure::render(&p.title, &[frf_panel(p)?], 1, WIDTH, HEIGHT)
+    Ok(figure::render(
+        &p.title,
+        &[frf_panel(p)?],
+        1,
+        WIDTH,
+        HEIGHT,
+    )?)
 }
 
 /// The figure's one panel: branches, swept points, jumps, backbone.

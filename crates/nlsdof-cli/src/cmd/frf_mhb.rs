@@ -6,12 +6,12 @@
 
 use super::roots::jumps_text;
 use crate::error::CliError;
-use crate::figure::{self, colour, Corner, Panel, Series, Style};
 use nlsdof::multi_harmonic::{
     harmonic_amplitude, harmonic_phase, level_sweeps, max_abs_displacement, LevelSweep,
     MAX_HARMONICS,
 };
 use nlsdof::{Model, SweepDirection};
+use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style};
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -448,5 +448,5 @@ fn render(title: &str, levels: &[LevelSweep], f_min: f64, f_max: f64) -> Result<
     }
     content.x_range = Some((f_min, f_max));
     content.y_range = Some((10f64.powf(lo.floor().max(-12.0)), 10f64.powf(0.5)));
-    figure::render(title, &[amp, content], 1, 1100, 430)
+    Ok(figure::render(title, &[amp, content], 1, 1100, 430)?)
 }

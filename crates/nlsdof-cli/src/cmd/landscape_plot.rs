@@ -65,7 +65,7 @@ pub fn render(id: &Identification, kind: Kind) -> Result<Vec<u8>, CliError> {
             Ok(serde_json::to_vec_pretty(&v).expect("json"))
         }
         Kind::Svg => {
-            crate::fonts::register();
+            nlsdof_figure::fonts::register();
             let mut s = String::new();
             {
                 let root = SVGBackend::with_string(&mut s, (W, H)).into_drawing_area();
@@ -75,14 +75,14 @@ pub fn render(id: &Identification, kind: Kind) -> Result<Vec<u8>, CliError> {
             Ok(s.into_bytes())
         }
         Kind::Png => {
-            crate::fonts::register();
+            nlsdof_figure::fonts::register();
             let mut buf = vec![255u8; (W * H * 3) as usize];
             {
                 let root = BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area();
                 draw(&root, id)?;
                 root.present().map_err(draw_err)?;
             }
-            crate::png::encode_png(&buf, W, H)
+            Ok(nlsdof_figure::encode_png(&buf, W, H)?)
         }
     }
 }
@@ -151,7 +151,7 @@ fn draw<DB: DrawingBackend>(
         for i in 0..nr {
             let v = val(l.at(i, j));
             let colour = if v.is_finite() {
-                let c = crate::png::viridis(1.0 - v / vmax);
+                let c = nlsdof_figure::viridis(1.0 - v / vmax);
                 RGBColor(c[0], c[1], c[2])
             } else {
                 RGBColor(200, 200, 200)
@@ -204,7 +204,7 @@ fn draw<DB: DrawingBackend>(
     cb.draw_series((0..steps).map(|k| {
         let a = vmax * k as f64 / steps as f64;
         let b = vmax * (k + 1) as f64 / steps as f64;
-        let c = crate::png::viridis(1.0 - (a + b) / (2.0 * vmax));
+        let c = nlsdof_figure::viridis(1.0 - (a + b) / (2.0 * vmax));
         Rectangle::new([(0.0, a), (1.0, b)], RGBColor(c[0], c[1], c[2]).filled())
     }))
     .map_err(draw_err)?;

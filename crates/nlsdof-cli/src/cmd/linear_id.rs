@@ -4,12 +4,12 @@
 //! written as a model file.
 
 use crate::error::CliError;
-use crate::figure::{self, colour, Panel, Series, Style};
 use nlsdof::vector_fitting::{
     identify_sdof, mobility, CircleFit, FrfWeighting, InputKind, MassSource, MeasuredFrf,
     OutputKind, PoleCount, SdofIdError, SdofIdOptions, SdofIdentification, SdofLinear, C64,
 };
 use nlsdof::Model;
+use nlsdof_figure::{self as figure, colour, Panel, Series, Style};
 use serde_json::json;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -633,5 +633,11 @@ fn render(id: &SdofIdentification, f_hz: &[f64], output: OutputKind) -> Result<S
             .series
             .push(Series::new(pts(&circle), green, Style::Line(1)).label("circle fit"));
     }
-    figure::render("Linear identification", &[mag, phase, nyquist], 3, 400, 600)
+    Ok(figure::render(
+        "Linear identification",
+        &[mag, phase, nyquist],
+        3,
+        400,
+        600,
+    )?)
 }

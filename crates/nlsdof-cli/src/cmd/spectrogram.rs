@@ -425,13 +425,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let t_plot = Instant::now();
     let heat = match &a.plot {
         Some(_) => Some(with_spinner("drawing heat map", || {
-            crate::png::heatmap_png(&panels, f_range, &title)
+            nlsdof_figure::heatmap_png(&panels, f_range, &title)
         })?),
         None => None,
     };
     let fall = match &a.waterfall {
         Some(_) => Some(with_spinner("drawing waterfall", || {
-            crate::png::waterfall_png(&panels, f_range, &title)
+            nlsdof_figure::waterfall_png(&panels, f_range, &title)
         })?),
         None => None,
     };

@@ -2,7 +2,6 @@
 
 use super::table::{sig, Table};
 use crate::error::CliError;
-use crate::figure::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
 use nlsdof::demo::spectra::PLOT_BAND;
 use nlsdof::demo::{
     noise_model, Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
@@ -10,6 +9,7 @@ use nlsdof::demo::{
 };
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, ETA, GAIN, KAPPA, RHO};
 use nlsdof::identification::{Parameter, PhaseQuadratureRow, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof_figure::{colour, render, Corner, Panel, Series, Style, DARK, GREY};
 use nlsdof_io::atomic::write_atomic;
 use serde_json::{json, Value};
 use std::f64::consts::TAU;
@@ -419,7 +419,7 @@ fn png_heatmap(
     band: Option<(f64, f64)>,
     title: &str,
 ) -> Result<bool, CliError> {
-    crate::png::spectrogram_heatmap(path, pair, band, title)?;
+    nlsdof_io::atomic::write_atomic(path, &nlsdof_figure::heatmap_png(pair, band, title)?)?;
     Ok(true)
 }
 
@@ -429,7 +429,7 @@ fn png_waterfall(
     band: Option<(f64, f64)>,
     title: &str,
 ) -> Result<bool, CliError> {
-    crate::png::spectrogram_waterfall(path, pair, band, title)?;
+    nlsdof_io::atomic::write_atomic(path, &nlsdof_figure::waterfall_png(pair, band, title)?)?;
     Ok(true)
 }
 

@@ -7,8 +7,8 @@
 //! ab_glyph from DejaVu Sans embedded in the binary, no system fonts), the
 //! cells are painted into the same buffer aggregated to pixels (**maximum**
 //! of the bins falling in a pixel, so a narrow peak never disappears), and
-//! the buffer is PNG-encoded (`image` crate) into an [`AtomicFile`]: the
-//! file appears complete or not at all.
+//! the buffer is PNG-encoded (`image` crate) and returned; the caller
+//! writes it (the CLI atomically: the file appears complete or not at all).
 //!
 //! * Heat map: time [s] across, frequency [Hz] up, colour = level in dB
 //!   (`20 log10` of an amplitude spectrogram, `10 log10` of a PSD; the
@@ -19,15 +19,11 @@
 //!   the panels) on a frequency axis, stacked in depth along a time axis,
 //!   drawn back to front with hidden-line removal.
 
-use crate::error::CliError;
+use crate::FigureError;
 use nlsdof::signal_processing::stft::{Scaling, Spectrogram};
-use nlsdof_io::atomic::AtomicFile;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use std::io::Write;
-use std::path::Path;
-use std::sync::Once;
 
 /// Colour scale span of the heat map, dB below the maximum.
 pub const DYNAMIC_RANGE_DB: f64 = 80.0;
@@ -37,26 +33,19 @@ const TITLE_H: u32 = 44;
 const BAR_W: u32 = 130;
 const FONT: &str = "sans-serif";
 
-static FONT_INIT: Once = Once::new();
-
 fn init_font() {
-    FONT_INIT.call_once(|| {
-        // The vendored font is valid; if registration ever failed, text would
-        // be missing but drawing would still not panic.
-        let _ = plotters::style::register_font(
-            FONT,
-            FontStyle::Normal,
-            include_bytes!("../assets/fonts/DejaVuSans.ttf"),
-        );
-    });
+    crate::fonts::register();
 }
 
-fn draw_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("cannot draw the spectrogram figure: {e}"))
+fn draw_err<E: std::fmt::Display>(e: E) -> FigureError {
+    FigureError::Draw {
+        figure: "the spectrogram figure",
+        detail: e.to_string(),
+    }
 }
 
 /// Viridis (matplotlib), 9 anchors, linear interpolation; `u` in [0, 1].
-pub(crate) fn viridis(u: f64) -> [u8; 3] {
+pub fn viridis(u: f64) -> [u8; 3] {
     const A: [[f64; 3]; 9] = [
         [68.0, 1.0, 84.0],
         [71.0, 44.0, 122.0],
@@ -102,34 +91,34 @@ fn band(s: &Spectrogram, f_range: Option<(f64, f64)>) -> (f64, f64, std::ops::Ra
 fn check_panels(
     panels: &[(&str, &Spectrogram)],
     f_range: Option<(f64, f64)>,
-) -> Result<(), CliError> {
+) -> Result<(), FigureError> {
     if panels.is_empty() {
-        return Err(CliError::Usage("no spectrogram to plot".into()));
+        return Err(FigureError::NoSpectrogram);
     }
     if let Some((a, b)) = f_range {
         if !(a.is_finite() && b.is_finite() && a < b) {
-            return Err(CliError::Usage(format!(
-                "frequency range {a}..{b} Hz must be finite and increasing"
-            )));
+            return Err(FigureError::BadFrequencyRange { min: a, max: b });
         }
     }
     for (label, s) in panels {
         if s.n_time == 0 || s.n_freq == 0 || s.magnitude.len() != s.n_time * s.n_freq {
-            return Err(CliError::Usage(format!(
-                "spectrogram {label:?} is empty or malformed ({} x {} cells, {} values)",
-                s.n_time,
-                s.n_freq,
-                s.magnitude.len()
-            )));
+            return Err(FigureError::MalformedSpectrogram {
+                label: label.to_string(),
+                n_time: s.n_time,
+                n_freq: s.n_freq,
+                values: s.magnitude.len(),
+            });
         }
         let (_, _, r) = band(s, f_range);
         if r.is_empty() {
             let (a, b) = f_range.unwrap_or((0.0, 0.0));
-            return Err(CliError::Usage(format!(
-                "spectrogram {label:?} has no frequency bin in {a}..{b} Hz (bins {} .. {} Hz)",
-                s.frequencies[0],
-                s.frequencies[s.n_freq - 1]
-            )));
+            return Err(FigureError::NoBinInRange {
+                label: label.to_string(),
+                min: a,
+                max: b,
+                first: s.frequencies[0],
+                last: s.frequencies[s.n_freq - 1],
+            });
         }
     }
     Ok(())
@@ -194,49 +183,14 @@ fn db_label(s: Scaling) -> &'static str {
     }
 }
 
-pub(crate) fn encode_png(buf: &[u8], w: u32, h: u32) -> Result<Vec<u8>, CliError> {
+/// PNG bytes of an RGB8 buffer `w × h`.
+pub fn encode_png(buf: &[u8], w: u32, h: u32) -> Result<Vec<u8>, FigureError> {
     use image::ImageEncoder;
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out)
         .write_image(buf, w, h, image::ColorType::Rgb8)
-        .map_err(|e| CliError::Usage(format!("cannot encode PNG: {e}")))?;
+        .map_err(|e| FigureError::Encode(e.to_string()))?;
     Ok(out)
-}
-
-fn write_png(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
-    let mut f = AtomicFile::create(path)?;
-    f.write_all(bytes).map_err(|source| {
-        CliError::Io(nlsdof_io::IoError::Write {
-            path: path.to_path_buf(),
-            source,
-        })
-    })?;
-    f.commit()?;
-    Ok(())
-}
-
-/// 2-D heat maps, side by side, shared dB colour scale with a colour bar;
-/// written atomically as PNG.
-pub fn spectrogram_heatmap(
-    path: &Path,
-    panels: &[(&str, &Spectrogram)],
-    f_range: Option<(f64, f64)>,
-    title: &str,
-) -> Result<(), CliError> {
-    let bytes = heatmap_png(panels, f_range, title)?;
-    write_png(path, &bytes)
-}
-
-/// 3-D waterfalls (Fig 8), side by side, shared amplitude scale; written
-/// atomically as PNG.
-pub fn spectrogram_waterfall(
-    path: &Path,
-    panels: &[(&str, &Spectrogram)],
-    f_range: Option<(f64, f64)>,
-    title: &str,
-) -> Result<(), CliError> {
-    let bytes = waterfall_png(panels, f_range, title)?;
-    write_png(path, &bytes)
 }
 
 /// The heat-map figure as PNG bytes.
@@ -244,7 +198,7 @@ pub fn heatmap_png(
     panels: &[(&str, &Spectrogram)],
     f_range: Option<(f64, f64)>,
     title: &str,
-) -> Result<Vec<u8>, CliError> {
+) -> Result<Vec<u8>, FigureError> {
     check_panels(panels, f_range)?;
     init_font();
     let scaling = panels[0].1.scaling;
@@ -410,7 +364,7 @@ pub fn waterfall_png(
     panels: &[(&str, &Spectrogram)],
     f_range: Option<(f64, f64)>,
     title: &str,
-) -> Result<Vec<u8>, CliError> {
+) -> Result<Vec<u8>, FigureError> {
     check_panels(panels, f_range)?;
     init_font();
     let mut vmax = 0.0f64;

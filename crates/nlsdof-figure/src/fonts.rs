@@ -1,11 +1,13 @@
 //! The one font of every plot: DejaVu Sans, embedded in the binary
-//! (`assets/fonts/`, Bitstream Vera licence in `LICENSE-DejaVu.txt`).
+//! (`assets/fonts/` of this crate, Bitstream Vera licence in
+//! `LICENSE-DejaVu.txt`).
 //!
 //! plotters is built with its `ab_glyph` text backend so that PNG figures
 //! can rasterise text without system fonts (CI machines and containers have
 //! none). With that backend every text element — in SVG too, where it is
 //! used to measure text for layout — needs a registered font, so
-//! [`register`] is called once at the start of `main`.
+//! [`register`] is called before any drawing (every function of this crate
+//! does; the CLI also calls it at the start of `main`).
 
 use std::sync::Once;
 

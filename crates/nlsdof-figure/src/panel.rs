@@ -4,9 +4,9 @@
 //! ([`render_png`]). plotters' SVG backend writes `<text>` elements, so no
 //! fonts are needed to view it; the legend is placed by hand because
 //! plotters can only estimate text extents. Spectrogram heat maps and
-//! waterfalls are in [`crate::png`].
+//! waterfalls are in [`crate::heatmap_png`] and [`crate::waterfall_png`].
 
-use crate::error::CliError;
+use crate::FigureError;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
@@ -122,8 +122,11 @@ fn ensure_font() {
     crate::fonts::register();
 }
 
-fn plot_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("cannot draw a figure: {e}"))
+fn plot_err<E: std::fmt::Display>(e: E) -> FigureError {
+    FigureError::Draw {
+        figure: "a figure",
+        detail: e.to_string(),
+    }
 }
 
 /// Tick label with decimals suited to an axis spanning `span`.
@@ -176,7 +179,7 @@ pub fn render(
     cols: usize,
     w: u32,
     h: u32,
-) -> Result<String, CliError> {
+) -> Result<String, FigureError> {
     ensure_font();
     let (width, height) = figure_size(panels, cols, w, h);
     let mut svg = String::new();
@@ -188,15 +191,14 @@ pub fn render(
 }
 
 /// The same figure as [`render`], as PNG bytes (drawn by the same code on
-/// the bitmap backend; no command writes a PNG line figure yet).
-#[cfg_attr(not(test), allow(dead_code))]
+/// the bitmap backend).
 pub fn render_png(
     title: &str,
     panels: &[Panel],
     cols: usize,
     w: u32,
     h: u32,
-) -> Result<Vec<u8>, CliError> {
+) -> Result<Vec<u8>, FigureError> {
     ensure_font();
     let (width, height) = figure_size(panels, cols, w, h);
     let mut buf = vec![0u8; width as usize * height as usize * 3];
@@ -204,7 +206,7 @@ pub fn render_png(
         let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
         draw_figure(&root, title, panels, cols)?;
     }
-    crate::png::encode_png(&buf, width, height)
+    crate::spectrogram::encode_png(&buf, width, height)
 }
 
 const TITLE_H: u32 = 40;
@@ -220,7 +222,7 @@ fn draw_figure<DB: DrawingBackend>(
     title: &str,
     panels: &[Panel],
     cols: usize,
-) -> Result<(), CliError> {
+) -> Result<(), FigureError> {
     let cols = cols.max(1);
     let rows = panels.len().div_ceil(cols).max(1);
     root.fill(&WHITE).map_err(plot_err)?;
@@ -243,7 +245,7 @@ fn draw_panel<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     area: &DrawingArea<DB, plotters::coord::Shift>,
     panel: &Panel,
-) -> Result<(), CliError> {
+) -> Result<(), FigureError> {
     let (chart_area, legend_area) = if panel.legend == Corner::Outside {
         let (w, _) = area.dim_in_pixel();
         let (a, b) = area.split_horizontally(w.saturating_sub(LEGEND_W));
@@ -464,7 +466,7 @@ fn draw_arrow<DB: DrawingBackend>(
     to: (i32, i32),
     c: RGBColor,
     width: u32,
-) -> Result<(), CliError> {
+) -> Result<(), FigureError> {
     let dy = to.1 - from.1;
     let head = 9.min(dy.abs());
     let base = to.1 - dy.signum() * head;

@@ -4,38 +4,28 @@
 //! the best, see `identification::global`). Synthetic noise-free data from
 //! the exact harmonic balance. Figures: docs/identification.md, "Speed".
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use nlsdof::identification::models::*;
-use nlsdof::identification::objective::model_amplitudes;
 use nlsdof::identification::*;
 use nlsdof::SweepDirection;
 use std::time::Duration;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
+/// 5 levels × 200 exact-HB up-sweep points over 8–13 Hz.
 fn data(theta: &Parameters) -> Dataset {
     let gammas = [0.05, 0.1, 0.2, 0.3, 0.4];
-    let mut recs = Vec::new();
-    for (l, &g) in gammas.iter().enumerate() {
-        for i in 0..200 {
-            let f = 8.0 + 5.0 * i as f64 / 199.0;
-            recs.push(Record {
-                level: format!("L{l}"),
-                gamma: g,
-                omega: TWO_PI * f,
-                amplitude: 1.0,
-                phase: None,
-                direction: SweepDirection::Up,
-                weight: 1.0,
-            });
-        }
-    }
-    let mut d = Dataset::from_records(&recs).unwrap();
-    let amps = model_amplitudes(&d, theta).unwrap();
-    for (c, a) in d.curves.iter_mut().zip(amps) {
-        c.amplitudes = a;
-    }
-    d
+    support::fixtures::hb_sweeps(
+        theta,
+        &gammas,
+        (8.0, 13.0),
+        200,
+        &[SweepDirection::Up],
+        None,
+    )
 }
 
 fn truth() -> Parameters {

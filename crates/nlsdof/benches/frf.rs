@@ -1,19 +1,13 @@
 //! `cargo bench -p nlsdof --bench frf`: 5 levels × 200 steps of a stepped-sine
 //! FRF with branch following (issue target: ≤ 0.1 ms for the wing).
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+use support::fixtures::wing;
+
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nlsdof::*;
 use std::f64::consts::PI;
-
-fn wing() -> Model {
-    // Table 3 (unloaded) + Table 7 (pre-estimated, non-integer)
-    Model::linear(0.26699, 306.7878, 0.1164)
-        .unwrap()
-        .with_stiffness(85000.0, 4.00220)
-        .unwrap()
-        .with_damping(0.01591, 3.03099)
-        .unwrap()
-}
 
 fn duffing() -> Model {
     let wn = 2.0 * PI * 10.0;

@@ -4,12 +4,14 @@
 //! (≤ 2 s; skipped when ../shared is absent) and of 1,000,000 data rows
 //! (≤ 10 s). Figures: docs/identification.md, "Speed".
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+
 use criterion::{criterion_group, criterion_main, Criterion};
-use nlsdof::harmonic_balance::{ForcedResponse, Formulation};
 use nlsdof::identification::equation_error::{solve_magnitude, solve_phase, Prepared, Terms};
 use nlsdof::identification::landscape::{landscape, Axis, LandscapePhase};
 use nlsdof::identification::models::*;
-use nlsdof::identification::objective::{normalised_model, FitSpec};
+use nlsdof::identification::objective::FitSpec;
 use nlsdof::identification::*;
 use nlsdof::SweepDirection;
 use std::time::Duration;
@@ -28,30 +30,17 @@ fn truth() -> Parameters {
 
 /// `levels` × `steps` exact-HB up-sweep points over 8–13 Hz, with phases.
 fn data(theta: &Parameters, levels: usize, steps: usize) -> Dataset {
-    let m = normalised_model(theta);
-    let omegas: Vec<f64> = (0..steps)
-        .map(|i| TWO_PI * (8.0 + 5.0 * i as f64 / (steps - 1) as f64))
+    let gammas: Vec<f64> = (0..levels)
+        .map(|l| 0.05 + 0.35 * l as f64 / (levels.max(2) - 1) as f64)
         .collect();
-    let mut recs = Vec::with_capacity(levels * steps);
-    for l in 0..levels {
-        let g = 0.05 + 0.35 * l as f64 / (levels.max(2) - 1) as f64;
-        let sw = ForcedResponse::from_normalised(&m, g, Formulation::HarmonicBalance)
-            .unwrap()
-            .sweep(&omegas, SweepDirection::Up)
-            .unwrap();
-        for p in &sw.points {
-            recs.push(Record {
-                level: format!("L{l}"),
-                gamma: g,
-                omega: p.omega,
-                amplitude: p.amplitude,
-                phase: Some(p.phase),
-                direction: SweepDirection::Up,
-                weight: 1.0,
-            });
-        }
-    }
-    Dataset::from_records(&recs).unwrap()
+    support::fixtures::hb_sweeps(
+        theta,
+        &gammas,
+        (8.0, 13.0),
+        steps,
+        &[SweepDirection::Up],
+        Some((1.0, 0.0)),
+    )
 }
 
 fn bench(c: &mut Criterion) {

@@ -22,10 +22,13 @@
 //! allocated once and reused (first-touch page faults excluded; the
 //! memory run reports them separately).
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+
 use nlsdof::excitation::{Dwell, Excitation, SampledInput, SteppedSine};
 use nlsdof::simulation::{simulate, simulate_into, Method, Options};
 use nlsdof::stepped_sine::{run_levels, RigOptions};
-use nlsdof::{Model, NormalisedModel, SweepDirection};
+use nlsdof::{NormalisedModel, SweepDirection};
 use std::f64::consts::TAU;
 use std::time::Instant;
 
@@ -38,12 +41,7 @@ fn wing(integer: bool) -> NormalisedModel {
     } else {
         (4.00220, 3.03099)
     };
-    Model::linear(0.26699, 306.7878, 0.1164)
-        .unwrap()
-        .with_stiffness(85000.0, rho)
-        .unwrap()
-        .with_damping(0.01591, eta)
-        .unwrap()
+    support::fixtures::wing_with_exponents(rho, eta)
         .normalised()
         .unwrap()
 }

@@ -7,11 +7,13 @@
 //! `H_d(e^{jθ}) = C (e^{jθ} I − Φ)⁻¹ Γ`, `θ = 2πf/f_s` — no simulation
 //! error at all.
 
+mod support;
 use nlsdof::signal_processing::{
     spectral_ratio, welch_frf, SignalError, Symmetry, WelchOptions, Window,
 };
 use nlsdof::vector_fitting::C64;
 use std::f64::consts::PI;
+use support::fixtures::Rng;
 
 struct Sdof {
     phi: [[f64; 2]; 2],
@@ -60,21 +62,6 @@ impl Sdof {
         let det = a * d - b * c;
         // First row of the inverse times Γ.
         (d * self.gam[0] - b * self.gam[1]) / det
-    }
-}
-
-struct Rng(u64);
-impl Rng {
-    fn u(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        (-2.0 * self.u().ln()).sqrt() * (2.0 * PI * self.u()).cos()
     }
 }
 

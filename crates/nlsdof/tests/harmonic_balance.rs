@@ -3,10 +3,12 @@
 //! (integer exponents), the classical Duffing fold conditions, Coulomb
 //! sticking, and step-size independence of branch following.
 
+mod support;
 use nlsdof::harmonic_balance::modulation_frequencies;
 use nlsdof::power_law::g;
 use nlsdof::*;
 use std::f64::consts::PI;
+use support::fixtures::Rng;
 
 fn linear_frf(m: &Model, gamma: f64, w: f64) -> (f64, f64) {
     let re = m.stiffness - m.mass * w * w;
@@ -54,21 +56,6 @@ fn linear_limit_equals_exact_sdof_frf() {
     assert!((pq.omega - m.omega_n()).abs() < 1e-12 * m.omega_n());
     let a_pq = gamma * m.mass / (m.damping * m.omega_n());
     assert!((pq.amplitude - a_pq).abs() < 1e-12 * a_pq);
-}
-
-/// Tiny deterministic PRNG (SplitMix64) so the test needs no extra crate.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
 }
 
 /// Polynomial coefficients (index = power of y, a = a0 y) of
@@ -143,8 +130,8 @@ fn integer_exponents_match_companion_matrix_roots_of_squared_polynomial() {
         let mass = 10f64.powf(rng.range(-2.0, 2.0));
         let wn = 2.0 * PI * 10f64.powf(rng.range(-0.5, 2.0));
         let zeta = 10f64.powf(rng.range(-3.0, -1.0));
-        let rho = (rng.next() * 5.0) as usize; // 0..4
-        let eta = (rng.next() * 4.0) as usize; // 0..3
+        let rho = (rng.uniform() * 5.0) as usize; // 0..4
+        let eta = (rng.uniform() * 4.0) as usize; // 0..3
         let gamma = 10f64.powf(rng.range(-1.0, 1.0));
         let a0 = gamma / (wn * wn);
         let a_res = a0 / (2.0 * zeta);
@@ -673,7 +660,6 @@ fn narrow_hysteresis_window_near_the_cusp_is_found() {
         let mid = 0.5 * (lo_g + hi_g);
         let f = duffing_exact_folds(&m, mid);
         if f.len() == 2 && (f[1] - f[0]) / f[0] < 3e-5 {
-            lo_g = mid;
             hi_g = mid;
             break;
         }

@@ -6,53 +6,18 @@
 
 mod support;
 
-use nlsdof::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
+use nlsdof::harmonic_balance::SweepDirection;
 use nlsdof::identification::equation_error::{
     solve_magnitude, solve_magnitude_lifted, solve_phase, PhaseConvention, Prepared, Terms,
 };
 use nlsdof::identification::landscape::{landscape, Axis, LandscapePhase};
 use nlsdof::identification::models::*;
-use nlsdof::identification::objective::{evaluate_with_phase, normalised_model, FitSpec};
+use nlsdof::identification::objective::{evaluate_with_phase, FitSpec};
 use nlsdof::identification::*;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
-/// Noise-free exact-HB sweeps of θ with phases written as
-/// `ψ = sign·φ + offset`.
-fn data(
-    theta: &Parameters,
-    gammas: &[f64],
-    f: (f64, f64),
-    steps: usize,
-    dirs: &[SweepDirection],
-    phase: Option<(f64, f64)>,
-) -> Dataset {
-    let model = normalised_model(theta);
-    let omegas: Vec<f64> = (0..steps)
-        .map(|i| TWO_PI * (f.0 + (f.1 - f.0) * i as f64 / (steps - 1) as f64))
-        .collect();
-    let mut recs = Vec::new();
-    for (l, &g) in gammas.iter().enumerate() {
-        let r =
-            ForcedResponse::from_normalised(&model, theta[GAIN] * g, Formulation::HarmonicBalance)
-                .unwrap();
-        for &d in dirs {
-            let sw = r.sweep(&omegas, d).unwrap();
-            for p in &sw.points {
-                recs.push(Record {
-                    level: format!("L{l}"),
-                    gamma: g,
-                    omega: p.omega,
-                    amplitude: p.amplitude,
-                    phase: phase.map(|(s, c)| s * p.phase + c),
-                    direction: d,
-                    weight: 1.0,
-                });
-            }
-        }
-    }
-    Dataset::from_records(&recs).unwrap()
-}
+use support::fixtures::hb_sweeps as data;
 
 /// Duffing + quadratic damping with jumps (f_n = 10 Hz, ζ = 1 %).
 fn duffing_quadratic() -> Parameters {

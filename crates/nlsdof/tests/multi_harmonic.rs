@@ -5,28 +5,19 @@
 //! the exact period of the conservative oscillator (backbone), the exact
 //! first-order folds, and convergence in H.
 
+mod support;
 use nlsdof::excitation::Sine;
 use nlsdof::multi_harmonic::backbone::multi_harmonic_backbone;
 use nlsdof::multi_harmonic::*;
 use nlsdof::simulation::{simulate_excitation, Method, Options, State};
 use nlsdof::*;
 use std::f64::consts::{PI, TAU};
+use support::fixtures::wing_normalised as wing;
 
 fn duffing_strong() -> NormalisedModel {
     Model::linear(1.0, 3947.84, 1.2566)
         .unwrap()
         .with_stiffness(1.2e7, 2.0)
-        .unwrap()
-        .normalised()
-        .unwrap()
-}
-
-fn wing() -> NormalisedModel {
-    Model::linear(0.26699, 306.7878, 0.1164)
-        .unwrap()
-        .with_stiffness(85000.0, 4.0022)
-        .unwrap()
-        .with_damping(0.01591, 3.03099)
         .unwrap()
         .normalised()
         .unwrap()

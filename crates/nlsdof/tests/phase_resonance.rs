@@ -4,14 +4,15 @@
 //! analytic Jacobian against finite differences; noise-free recovery of
 //! every model; identifiability and bad-data errors.
 
+mod support;
 use nlsdof::harmonic_balance::{ForcedResponse, Formulation};
-use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::models::*;
 use nlsdof::identification::objective::normalised_model;
 use nlsdof::identification::phase_resonance::*;
 use nlsdof::identification::Parameters;
 use nlsdof::identification::{ModelKind, Sign, SpecError, Status};
 use nlsdof::power_law::g_unchecked;
+use support::fixtures::Rng;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
@@ -162,27 +163,27 @@ fn model_point_satisfies_both_conditions_and_is_a_steady_state() {
 
 #[test]
 fn quadrature_derivatives_match_finite_differences() {
-    let mut rng = SplitMix64(11);
+    let mut rng = Rng(11);
     let mut checked = 0;
     for trial in 0..40 {
-        let wn = TWO_PI * (5.0 + 20.0 * rng.next_f64());
+        let wn = TWO_PI * (5.0 + 20.0 * rng.uniform());
         let softening = trial % 3 == 2;
         let mut th = Parameters::from([
             wn * wn,
-            wn * (0.005 + 0.03 * rng.next_f64()),
+            wn * (0.005 + 0.03 * rng.uniform()),
             0.0,
-            0.5 + 4.0 * rng.next_f64(),
+            0.5 + 4.0 * rng.uniform(),
             0.0,
-            -0.8 + 3.0 * rng.next_f64(),
-            0.5 + rng.next_f64(),
+            -0.8 + 3.0 * rng.uniform(),
+            0.5 + rng.uniform(),
         ]);
-        let gamma = 0.1 + rng.next_f64();
+        let gamma = 0.1 + rng.uniform();
         // coefficients sized at the linear resonance amplitude
         let a0 = th[GAIN] * gamma / (th[DELTA] * wn);
-        let shift = if softening { -0.05 } else { 0.1 } * rng.next_f64().max(0.1);
+        let shift = if softening { -0.05 } else { 0.1 } * rng.uniform().max(0.1);
         th[BETA] = shift * th[ALPHA] / (g_unchecked(th[RHO]) * a0.powf(th[RHO]));
         th[KAPPA] =
-            (0.2 + rng.next_f64()) * th[DELTA] / (g_unchecked(th[ETA]) * (wn * a0).powf(th[ETA]));
+            (0.2 + rng.uniform()) * th[DELTA] / (g_unchecked(th[ETA]) * (wn * a0).powf(th[ETA]));
         let d = PrDataset::new(vec![PrPoint {
             level: "x".into(),
             gamma,
@@ -292,10 +293,10 @@ fn noisy_points_give_intervals() {
     let th = truth(ModelKind::DuffingQuadratic, Sign::Hardening);
     let gammas: Vec<f64> = (0..8).map(|i| 0.1 + 0.1 * i as f64).collect();
     let mut d = points(&th, &gammas);
-    let mut rng = SplitMix64(5);
+    let mut rng = Rng(5);
     for p in &mut d.points {
-        p.amplitude *= 1.0 + 0.01 * (2.0 * rng.next_f64() - 1.0);
-        p.omega *= 1.0 + 1e-4 * (2.0 * rng.next_f64() - 1.0);
+        p.amplitude *= 1.0 + 0.01 * (2.0 * rng.uniform() - 1.0);
+        p.omega *= 1.0 + 1e-4 * (2.0 * rng.uniform() - 1.0);
     }
     let spec = default_spec(ModelKind::DuffingQuadratic, &d, Sign::Hardening);
     let r = fit_phase_resonance(&d, &spec, &PrFitOptions::default(), &|| {}).unwrap();

@@ -2,6 +2,7 @@
 //! linear responses, convergence order, energy balance, the exact Coulomb
 //! free decay, and error handling.
 
+mod support;
 use nlsdof::excitation::{Excitation, SampledInput, Sine};
 use nlsdof::simulation::{
     dissipated_power, energy, simulate, simulate_excitation, simulate_to_vec, Method, Options,
@@ -9,22 +10,13 @@ use nlsdof::simulation::{
 };
 use nlsdof::{Model, NormalisedModel};
 use std::f64::consts::{PI, TAU};
+use support::fixtures::wing;
 
 struct Zero;
 impl Excitation for Zero {
     fn accel(&self, _t: f64) -> f64 {
         0.0
     }
-}
-
-fn wing() -> Model {
-    // Table 3 (unloaded) + Table 7 (pre-estimated linear parameters)
-    Model::linear(0.26699, 306.7878, 0.1164)
-        .unwrap()
-        .with_stiffness(85000.0, 4.00220)
-        .unwrap()
-        .with_damping(0.01591, 3.03099)
-        .unwrap()
 }
 
 fn collect(

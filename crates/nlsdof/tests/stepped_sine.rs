@@ -3,20 +3,13 @@
 //! weakly nonlinear wing (Tables 3 + 7), and the fold frequencies of a
 //! strong Duffing oscillator.
 
+mod support;
 use nlsdof::excitation::Excitation;
 use nlsdof::simulation::{simulate_excitation, Method, Options, State};
 use nlsdof::stepped_sine::{run, run_levels, run_sweeps, RigOptions, RigSweep};
 use nlsdof::{ForcedResponse, Formulation, Model, SweepDirection};
 use std::f64::consts::{PI, TAU};
-
-fn wing() -> Model {
-    Model::linear(0.26699, 306.7878, 0.1164)
-        .unwrap()
-        .with_stiffness(85000.0, 4.00220)
-        .unwrap()
-        .with_damping(0.01591, 3.03099)
-        .unwrap()
-}
+use support::fixtures::wing;
 
 /// The paper's five input levels (Table 2, peak-to-peak) as zero-to-peak γ.
 const LEVELS_PP: [f64; 5] = [0.82, 1.24, 1.62, 2.00, 2.46];

@@ -2,8 +2,8 @@
 //! discrete sensitivities, recovery from noise-free and noisy simulated
 //! records, prediction on a separate range, agreement with the simulator.
 
+mod support;
 use nlsdof::excitation::{upsample_cubic, SampledInput};
-use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::time_domain::{
     fit_time_domain, output_and_sensitivities, predict, simulate_output, SampleRange,
     TimeFitOptions, TimeModel, TimeRecord, N_TIME_PARAMS, TIME_PARAM_NAMES, UPSAMPLE,
@@ -11,14 +11,15 @@ use nlsdof::identification::time_domain::{
 use nlsdof::identification::ModelKind;
 use nlsdof::simulation::{simulate, Method, Options, State};
 use nlsdof::NormalisedModel;
+use support::fixtures::Rng;
 
 const FS: f64 = 200.0;
 
 /// A random-phase multisine, 0.5–15 Hz, RMS about 1 (seeded).
 fn multisine(n: usize, seed: u64) -> Vec<f64> {
-    let mut rng = SplitMix64(seed);
+    let mut rng = Rng(seed);
     let lines: Vec<(f64, f64)> = (1..=30)
-        .map(|k| (0.5 * k as f64, 2.0 * std::f64::consts::PI * rng.next_f64()))
+        .map(|k| (0.5 * k as f64, 2.0 * std::f64::consts::PI * rng.uniform()))
         .collect();
     let amp = (2.0 / lines.len() as f64).sqrt();
     (0..n)
@@ -30,13 +31,6 @@ fn multisine(n: usize, seed: u64) -> Vec<f64> {
                 .sum()
         })
         .collect()
-}
-
-/// Standard normal by Box–Muller.
-fn gauss(rng: &mut SplitMix64) -> f64 {
-    let u1 = rng.next_f64().max(1e-300);
-    let u2 = rng.next_f64();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
 fn truth(kind: ModelKind) -> TimeModel {
@@ -65,9 +59,9 @@ fn record(kind: ModelKind, n: usize, noise: f64, seed: u64) -> (Vec<f64>, Vec<f6
     let mut y = simulate_output(&truth(kind), &u, FS, State { x: 0.1, v: -1.0 }).unwrap();
     if noise > 0.0 {
         let rms = (y.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-        let mut rng = SplitMix64(seed);
+        let mut rng = Rng(seed);
         for v in y.iter_mut() {
-            *v += noise * rms * gauss(&mut rng);
+            *v += noise * rms * rng.normal();
         }
     }
     (u, y)

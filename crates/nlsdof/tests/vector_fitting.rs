@@ -3,12 +3,14 @@
 //! linear part (paper Table 3 values), model-order selection, the numpy
 //! reference, classical single-mode methods and bad input.
 
+mod support;
 use nlsdof::vector_fitting::{
     circle_fit, dominant_mode, fit_auto, half_power, modal_parameters, sdof_linear_part,
     vector_fit, InputKind, MassSource, OutputKind, VectorFitError, VectorFitTermination, VfOptions,
     C64,
 };
 use std::f64::consts::PI;
+use support::fixtures::Rng;
 
 /// One mode of a synthetic receptance `A / (ω_n² − ω² + 2jζω_nω)`.
 #[derive(Clone, Copy)]
@@ -42,22 +44,6 @@ fn frf(modes: &[Mode], w: &[f64]) -> Vec<C64> {
     w.iter()
         .map(|&w| modes.iter().map(|m| m.h(w)).sum())
         .collect()
-}
-
-/// SplitMix64 + Box–Muller: deterministic standard normal samples.
-struct Rng(u64);
-impl Rng {
-    fn u(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        (-2.0 * self.u().ln()).sqrt() * (2.0 * PI * self.u()).cos()
-    }
 }
 
 /// Adds complex white Gaussian noise of RMS `level × RMS|H|` (additive,

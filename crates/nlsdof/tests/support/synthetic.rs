@@ -2,8 +2,8 @@
 //! exact first-order HB sweeps of a random power-law model, 1 % noise.
 #![allow(dead_code)]
 
+use super::fixtures::Rng;
 use nlsdof::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
-use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::models::*;
 use nlsdof::identification::{Dataset, Parameters, Record};
 use nlsdof::power_law::g_unchecked;
@@ -28,15 +28,8 @@ pub struct Case {
     pub has_jump: bool,
 }
 
-/// Standard normal deviate (Box–Muller).
-pub fn normal(rng: &mut SplitMix64) -> f64 {
-    let u1 = rng.next_f64().max(1e-300);
-    let u2 = rng.next_f64();
-    (-2.0 * u1.ln()).sqrt() * (TWO_PI * u2).cos()
-}
-
-fn log_uniform(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
-    (lo.ln() + (hi.ln() - lo.ln()) * rng.next_f64()).exp()
+fn log_uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + (hi.ln() - lo.ln()) * rng.uniform()).exp()
 }
 
 fn model_of(th: &Parameters) -> NormalisedModel {
@@ -69,7 +62,7 @@ fn model_of(th: &Parameters) -> NormalisedModel {
 ///   lead, offset uniform in [−π, π]);
 /// * noise: amplitude × (1 + 0.01 N(0,1)), phase + 0.01 N(0,1) rad.
 pub fn case(seed: u64) -> Case {
-    let mut rng = SplitMix64(0x5EED_0000 + seed.wrapping_mul(0x9E37_79B9));
+    let mut rng = Rng(0x5EED_0000 + seed.wrapping_mul(0x9E37_79B9));
     for _ in 0..3 {
         rng.next_u64();
     }
@@ -78,13 +71,13 @@ pub fn case(seed: u64) -> Case {
     let wn = TWO_PI * fn_hz;
     let alpha = wn * wn;
     let delta = 2.0 * zeta * wn;
-    let rho = 0.5 + 7.5 * rng.next_f64();
+    let rho = 0.5 + 7.5 * rng.uniform();
     let coulomb = rng.next_u64() % 6 == 0;
     let eta = if coulomb {
         -1.0
     } else {
         // [−0.9, −0.5] has 0.4 of the 5.9 total length
-        let u = rng.next_f64() * 5.9;
+        let u = rng.uniform() * 5.9;
         if u < 0.4 {
             -0.9 + u
         } else {
@@ -93,7 +86,7 @@ pub fn case(seed: u64) -> Case {
     };
     let softening = rng.next_u64() % 3 == 0;
     let n_levels = 1 + (rng.next_u64() % 6) as usize;
-    let ratio = 3.0 + 3.0 * rng.next_f64();
+    let ratio = 3.0 + 3.0 * rng.uniform();
     let gamma1 = 1.0;
     let gammas: Vec<f64> = (0..n_levels)
         .map(|l| {
@@ -114,7 +107,7 @@ pub fn case(seed: u64) -> Case {
     let sign = if softening { -1.0 } else { 1.0 };
     let beta = sign * s_k * alpha / (g_unchecked(rho) * a_lin.powf(rho));
     let kappa = if coulomb {
-        let f = 0.1 + 0.4 * rng.next_f64();
+        let f = 0.1 + 0.4 * rng.uniform();
         f * gammas[0] * std::f64::consts::PI / 4.0
     } else {
         let c_k = log_uniform(&mut rng, 1.0, 5.0);
@@ -139,7 +132,7 @@ pub fn case(seed: u64) -> Case {
     let with_phase = rng.next_u64() % 2 == 0;
     let phase = with_phase.then(|| {
         let s = if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 };
-        let c = std::f64::consts::PI * (2.0 * rng.next_f64() - 1.0);
+        let c = std::f64::consts::PI * (2.0 * rng.uniform() - 1.0);
         (s, c)
     });
     let mut recs = Vec::new();
@@ -162,9 +155,9 @@ pub fn case(seed: u64) -> Case {
                 let a0 = if p.sticking { 0.0 } else { p.amplitude };
                 cl.push(a0);
                 lags.push(p.phase);
-                let a = a0 * (1.0 + 0.01 * normal(&mut rng));
+                let a = a0 * (1.0 + 0.01 * rng.normal());
                 let ph = phase.map(|(s, c)| {
-                    let lag = p.phase + 0.01 * normal(&mut rng);
+                    let lag = p.phase + 0.01 * rng.normal();
                     nlsdof::identification::equation_error::wrap(s * lag + c)
                 });
                 recs.push(Record {

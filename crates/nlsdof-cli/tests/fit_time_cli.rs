@@ -4,8 +4,11 @@
 
 mod common;
 
+#[path = "../../nlsdof/tests/support/fixtures.rs"]
+#[allow(dead_code)]
+mod fixtures;
 use common::{fails, json, ok, write};
-use nlsdof::identification::global::SplitMix64;
+use fixtures::Rng;
 use nlsdof::identification::time_domain::{simulate_output, TimeModel};
 use nlsdof::simulation::State;
 use nlsdof::NormalisedModel;
@@ -33,9 +36,9 @@ fn truth() -> TimeModel {
 
 /// Silverbox-style CSV of an exact Duffing record (random-phase multisine).
 fn write_record(dir: &Path) -> PathBuf {
-    let mut rng = SplitMix64(11);
+    let mut rng = Rng(11);
     let lines: Vec<(f64, f64)> = (1..=30)
-        .map(|k| (0.5 * k as f64, std::f64::consts::TAU * rng.next_f64()))
+        .map(|k| (0.5 * k as f64, std::f64::consts::TAU * rng.uniform()))
         .collect();
     let amp = (2.0 / 30.0f64).sqrt();
     let u: Vec<f64> = (0..N)

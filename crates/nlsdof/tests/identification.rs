@@ -2,14 +2,15 @@
 //! noise-free recovery of every model, interval coverage with 1 % noise,
 //! typed bad-data errors, and the clamped-clamped beam (real data).
 
+mod support;
 use nlsdof::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
-use nlsdof::identification::global::SplitMix64;
 use nlsdof::identification::levenberg_marquardt::LeastSquares;
 use nlsdof::identification::models::*;
 use nlsdof::identification::objective::{
     amplitude_derivatives, model_amplitudes, normalised_model, Problem,
 };
 use nlsdof::identification::*;
+use support::fixtures::Rng;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
@@ -105,20 +106,20 @@ fn rel(a: f64, b: f64) -> f64 {
 
 #[test]
 fn amplitude_derivatives_match_finite_differences() {
-    let mut rng = SplitMix64(7);
+    let mut rng = Rng(7);
     let mut checked = 0;
     for _ in 0..40 {
         let th = Parameters::from([
-            (TWO_PI * (5.0 + 20.0 * rng.next_f64())).powi(2),
-            0.5 + 3.0 * rng.next_f64(),
-            1e3 * (0.1 + rng.next_f64()) * 10f64.powf(3.0 * rng.next_f64()),
-            0.5 + 4.0 * rng.next_f64(),
-            0.05 + rng.next_f64(),
-            -0.8 + 3.0 * rng.next_f64(),
-            0.5 + rng.next_f64(),
+            (TWO_PI * (5.0 + 20.0 * rng.uniform())).powi(2),
+            0.5 + 3.0 * rng.uniform(),
+            1e3 * (0.1 + rng.uniform()) * 10f64.powf(3.0 * rng.uniform()),
+            0.5 + 4.0 * rng.uniform(),
+            0.05 + rng.uniform(),
+            -0.8 + 3.0 * rng.uniform(),
+            0.5 + rng.uniform(),
         ]);
-        let gamma = 0.2 + 3.0 * rng.next_f64();
-        let omega = th[ALPHA].sqrt() * (0.7 + 0.8 * rng.next_f64());
+        let gamma = 0.2 + 3.0 * rng.uniform();
+        let omega = th[ALPHA].sqrt() * (0.7 + 0.8 * rng.uniform());
         let roots = |t: &Parameters| {
             ForcedResponse::from_normalised(
                 &normalised_model(t),
@@ -171,14 +172,14 @@ fn problem_jacobian_in_optimisation_variables_matches_finite_differences() {
     let mut spec = FitSpec::new(ModelKind::Generalised, &data);
     spec.free("gain").unwrap();
     let p = Problem::new(&data, &spec).unwrap();
-    let mut rng = SplitMix64(3);
+    let mut rng = Rng(3);
     for _ in 0..5 {
         let mut t = th;
         for v in [ALPHA, DELTA, BETA, KAPPA, GAIN] {
-            t[v] *= 1.0 + 0.1 * (rng.next_f64() - 0.5);
+            t[v] *= 1.0 + 0.1 * (rng.uniform() - 0.5);
         }
-        t[RHO] += 0.3 * (rng.next_f64() - 0.5);
-        t[ETA] += 0.3 * (rng.next_f64() - 0.5);
+        t[RHO] += 0.3 * (rng.uniform() - 0.5);
+        t[ETA] += 0.3 * (rng.uniform() - 0.5);
         let u = p.u_of(&t);
         let (r, j) = p.residuals_and_jacobian(&u).unwrap();
         let n = u.len();
@@ -304,7 +305,7 @@ fn intervals_cover_truth_with_one_percent_noise() {
     let free = spec0.free_indices();
     let mut covered = vec![0usize; free.len()];
     let trials = 50;
-    let mut rng = SplitMix64(2024);
+    let mut rng = Rng(2024);
     let peak = clean
         .curves
         .iter()
@@ -316,7 +317,7 @@ fn intervals_cover_truth_with_one_percent_noise() {
             let g = c.gamma;
             for a in c.amplitudes.iter_mut() {
                 // Box–Muller normal noise
-                let (u1, u2) = (rng.next_f64().max(1e-300), rng.next_f64());
+                let (u1, u2) = (rng.uniform().max(1e-300), rng.uniform());
                 let z = (-2.0 * u1.ln()).sqrt() * (TWO_PI * u2).cos();
                 *a = (*a + 0.01 * peak * g * z).abs();
             }
@@ -510,19 +511,19 @@ fn multistable_first_step_is_selected_by_the_measured_amplitude() {
 #[test]
 fn quadrature_frequency_derivatives_match_finite_differences() {
     use nlsdof::identification::jumps::quadrature_frequency;
-    let mut rng = SplitMix64(19);
+    let mut rng = Rng(19);
     let mut checked = 0;
     for _ in 0..30 {
         let th = Parameters::from([
-            (TWO_PI * (5.0 + 20.0 * rng.next_f64())).powi(2),
-            0.5 + 3.0 * rng.next_f64(),
-            1e3 * (0.1 + rng.next_f64()) * 10f64.powf(3.0 * rng.next_f64()),
-            0.5 + 4.0 * rng.next_f64(),
-            0.05 + rng.next_f64(),
-            -0.8 + 3.0 * rng.next_f64(),
-            0.5 + rng.next_f64(),
+            (TWO_PI * (5.0 + 20.0 * rng.uniform())).powi(2),
+            0.5 + 3.0 * rng.uniform(),
+            1e3 * (0.1 + rng.uniform()) * 10f64.powf(3.0 * rng.uniform()),
+            0.5 + 4.0 * rng.uniform(),
+            0.05 + rng.uniform(),
+            -0.8 + 3.0 * rng.uniform(),
+            0.5 + rng.uniform(),
         ]);
-        let gamma = 0.2 + 3.0 * rng.next_f64();
+        let gamma = 0.2 + 3.0 * rng.uniform();
         let Some((w0, d)) = quadrature_frequency(&th, gamma).unwrap() else {
             continue;
         };

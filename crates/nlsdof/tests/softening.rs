@@ -3,11 +3,13 @@
 //! down-sweeps jump on the low-frequency side, and clean failure for
 //! parameter sets whose backbone has no positive frequency.
 
+mod support;
 use nlsdof::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 use nlsdof::identification::models::*;
 use nlsdof::identification::objective::{model_amplitudes, normalised_model};
 use nlsdof::identification::phase_resonance::{model_points, PrDataset, PrPoint};
 use nlsdof::identification::*;
+use support::fixtures::Rng;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
@@ -197,7 +199,6 @@ fn strongly_softening_parameter_sets_fail_cleanly() {
 fn softening_jacobian_in_optimisation_variables_matches_finite_differences() {
     // generalised softening model: u_β = ln(−β_ref), the ρ column carries
     // ∂β/∂ρ of the reparametrisation; levels low enough for no jumps
-    use nlsdof::identification::global::SplitMix64;
     use nlsdof::identification::levenberg_marquardt::LeastSquares;
     use nlsdof::identification::objective::Problem;
     let mut th = truth();
@@ -215,11 +216,11 @@ fn softening_jacobian_in_optimisation_variables_matches_finite_differences() {
             PARAM_NAMES[j]
         );
     }
-    let mut rng = SplitMix64(9);
+    let mut rng = Rng(9);
     for _ in 0..4 {
         let u: Vec<f64> = u_true
             .iter()
-            .map(|v| v + 0.05 * (rng.next_f64() - 0.5))
+            .map(|v| v + 0.05 * (rng.uniform() - 0.5))
             .collect();
         assert!(p.theta(&u)[BETA] < 0.0);
         let (r, j) = p.residuals_and_jacobian(&u).unwrap();

@@ -112,7 +112,7 @@ fn sum_sq(r: &[f64]) -> f64 {
 
 /// Solves the symmetric positive definite system `a x = b` (n × n,
 /// row-major) by Cholesky; `None` if not positive definite.
-pub fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+pub(crate) fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     let mut l = vec![0.0; n * n];
     for i in 0..n {
         for j in 0..=i {

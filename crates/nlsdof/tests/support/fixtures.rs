@@ -103,12 +103,15 @@ impl Rng {
 }
 
 #[test]
-fn rng_matches_the_library_generator_and_is_normal() {
+fn rng_is_uniform_and_normal() {
     let mut a = Rng(7);
-    let mut b = nlsdof::identification::global::SplitMix64(7);
-    for _ in 0..10 {
-        assert_eq!(a.uniform(), b.next_f64());
-    }
+    let u: Vec<f64> = (0..100_000).map(|_| a.uniform()).collect();
+    assert!(u.iter().all(|&v| (0.0..1.0).contains(&v)));
+    let mean = u.iter().sum::<f64>() / u.len() as f64;
+    assert!(
+        (mean - 0.5).abs() < 5.0 * (1.0 / 12.0 / u.len() as f64).sqrt(),
+        "{mean}"
+    );
     let n = 200_000;
     let mut r = Rng(1);
     let x: Vec<f64> = (0..n).map(|_| r.normal()).collect();

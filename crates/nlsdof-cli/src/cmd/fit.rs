@@ -1083,6 +1083,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "--landscape, --no-phase, --phase-convention and --weighting belong to the default staged fit, not to --integer or --sign auto (which fit Eq 31, absolute)".into(),
         ));
     }
+    // every output can be written, and no file is named twice, before any work
+    let mut targets: Vec<(&str, &Path)> = Vec::new();
+    if let Some(p) = &args.out {
+        targets.push(("--out", p));
+    }
+    if let Some(p) = &args.plot {
+        targets.push(("--plot", p));
+    }
+    nlsdof_io::atomic::check_targets(&targets)?;
     let data = args.data.load_lag_phases()?;
     let mut spec = FitSpec::new_signed(
         kind,
@@ -1138,12 +1147,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
         pb.finish_and_clear();
         r.map_err(|e| CliError::Usage(e.to_string()))?
     };
-    // write --out first (atomic) so a failure leaves nothing behind
+    // render everything first, then commit the files
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(out) = &args.out {
-        nlsdof_io::atomic::write_atomic(out, model_file_text(&res, mass)?.as_bytes())?;
+        files.push((out.clone(), model_file_text(&res, mass)?.into_bytes()));
     }
     if let Some(p) = &args.plot {
-        nlsdof_io::atomic::write_atomic(p, fit_svg(&data, &res).as_bytes())?;
+        files.push((p.clone(), fit_svg(&data, &res).into_bytes()));
+    }
+    for (p, bytes) in &files {
+        nlsdof_io::atomic::write_atomic(p, bytes)?;
     }
     if args.json {
         let mut v = result_json(&data, &res, mass)?;

@@ -348,30 +348,12 @@ fn fit_out_and_plot_all_or_nothing() {
     );
     // the direct Eq 31 searches (--integer, --sign auto) too
     for extra in [&["--integer"][..], &["--sign", "auto"][..]] {
-        let mut a = vec![
-            "fit",
-            s(&data),
-            "--model",
-            "generalised",
-            "--out",
-            s(&f),
-            "--plot",
-            s(&d),
-        ];
-        a.extend_from_slice(extra);
-        fails(&a, "directory", &f);
-        let mut a = vec![
-            "fit",
-            s(&data),
-            "--model",
-            "generalised",
-            "--out",
-            s(&f),
-            "--plot",
-            s(&f),
-        ];
-        a.extend_from_slice(extra);
-        fails(&a, "two outputs", &f);
+        for (plot, want) in [(&d, "directory"), (&f, "two outputs")] {
+            let mut a = vec!["fit", s(&data), "--model", "generalised"];
+            a.extend_from_slice(&["--out", s(&f), "--plot", s(plot)]);
+            a.extend_from_slice(extra);
+            fails(&a, want, &f);
+        }
     }
 }
 

@@ -537,30 +537,22 @@ impl Visit for Rig<'_> {
             }
             let integration_error = {
                 let mut scratch = counters;
-                let coarse = cycle_harmonic(
-                    &d,
-                    model.kappa,
-                    coulomb,
-                    mode,
-                    gamma,
-                    omega,
-                    st,
-                    n,
-                    t,
-                    &mut scratch,
-                )?;
-                let fine = cycle_harmonic(
-                    &d,
-                    model.kappa,
-                    coulomb,
-                    mode,
-                    gamma,
-                    omega,
-                    st,
-                    2 * n,
-                    t,
-                    &mut scratch,
-                )?;
+                let mut harmonic = |m: usize| {
+                    cycle_harmonic(
+                        &d,
+                        model.kappa,
+                        coulomb,
+                        mode,
+                        gamma,
+                        omega,
+                        st,
+                        m,
+                        t,
+                        &mut scratch,
+                    )
+                };
+                let coarse = harmonic(n)?;
+                let fine = harmonic(2 * n)?;
                 let size = fine.0.hypot(fine.1);
                 if size > 0.0 {
                     (coarse.0 - fine.0).hypot(coarse.1 - fine.1) * 16.0 / 15.0 / size

@@ -15,7 +15,11 @@
 //!
 //! # Guided tour
 //!
-//! One entry point per task, each with a runnable example below.
+//! One entry point per task, each with a runnable example below. The model
+//! is a [`Model`] (physical: kg, N/m, …) or its mass-normalised form
+//! [`NormalisedModel`] (Eq 32); every computation takes either
+//! ([`AsNormalised`]). Identified parameters are [`identification::Parameters`],
+//! with each entry's units and mass scaling in [`identification::Parameter`].
 //!
 //! | task | entry point | result |
 //! | --- | --- | --- |
@@ -241,5 +245,5 @@ pub use harmonic_balance::{
     LevelResponse, NoMotion, PhaseQuadrature, RootSet, SteadyState, Sweep, SweepDirection,
     SweepPoint,
 };
-pub use model::{Model, NormalisedModel};
+pub use model::{AsNormalised, Model, NormalisedModel};
 pub use power_law::PowerLaw;

@@ -310,3 +310,37 @@ mod tests {
         assert!((back.nonlinear_damping.unwrap().coefficient - 0.01591).abs() < 1e-15);
     }
 }
+
+/// Either form of the model: every computation of the crate (harmonic
+/// balance, simulation, the rig, multi-harmonic balance) accepts the
+/// physical [`Model`] or its mass-normalised form [`NormalisedModel`]
+/// through this trait, so one model value serves every entry point.
+///
+/// ```
+/// use nlsdof::{simulation::{simulate_to_vec, Options}, excitation::SampledInput, Model};
+/// let m = Model::linear(2.0, 800.0, 1.0)?; // physical
+/// let u = vec![1.0; 64];
+/// let input = SampledInput::uniform(&u, 100.0, 0.0)?;
+/// let (a, _) = simulate_to_vec(&m, &input, &Options::default())?;
+/// let (b, _) = simulate_to_vec(&m.normalised()?, &input, &Options::default())?;
+/// assert_eq!(a.x, b.x);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub trait AsNormalised {
+    /// The mass-normalised model (for [`Model`]: validated, then divided
+    /// by the mass; for [`NormalisedModel`]: itself, each computation
+    /// checks what it needs).
+    fn as_normalised(&self) -> Result<NormalisedModel, ParameterError>;
+}
+
+impl AsNormalised for Model {
+    fn as_normalised(&self) -> Result<NormalisedModel, ParameterError> {
+        self.normalised()
+    }
+}
+
+impl AsNormalised for NormalisedModel {
+    fn as_normalised(&self) -> Result<NormalisedModel, ParameterError> {
+        Ok(*self)
+    }
+}

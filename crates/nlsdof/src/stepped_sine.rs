@@ -60,6 +60,7 @@
 //! `samples_per_cycle`.
 
 use crate::harmonic_balance::SweepDirection;
+use crate::model::AsNormalised;
 use crate::model::NormalisedModel;
 use crate::simulation::coulomb::{self, Mode};
 use crate::simulation::law::{dispatch, Dyn, Law, Visit};
@@ -247,20 +248,21 @@ pub fn effective_decay_rate(model: &NormalisedModel, a: f64, omega: f64) -> f64 
 /// Runs the rig at one level `gamma` over the strictly increasing
 /// frequencies `omegas` (rad/s) in `direction`, from state `initial`.
 pub fn run(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gamma: f64,
     omegas: &[f64],
     direction: SweepDirection,
     options: &RigOptions,
     initial: State,
 ) -> Result<RigSweep, SimulationError> {
+    let model = &model.as_normalised()?;
     run_with_progress(model, gamma, omegas, direction, options, initial, &|| {})
 }
 
 /// [`run`] calling `progress` after every frequency step.
 #[allow(clippy::too_many_arguments)]
 pub fn run_with_progress(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gamma: f64,
     omegas: &[f64],
     direction: SweepDirection,
@@ -268,6 +270,7 @@ pub fn run_with_progress(
     initial: State,
     progress: &(dyn Fn() + Sync),
 ) -> Result<RigSweep, SimulationError> {
+    let model = &model.as_normalised()?;
     check_model(model)?;
     check_options(options)?;
     check_omegas(omegas)?;
@@ -310,13 +313,14 @@ pub fn run_with_progress(
 /// Results in the order of `gammas`, identical whatever the number of
 /// threads; on failure, the error of the first failing level.
 pub fn run_levels(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gammas: &[f64],
     omegas: &[f64],
     direction: SweepDirection,
     options: &RigOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<RigSweep>, SimulationError> {
+    let model = &model.as_normalised()?;
     run_sweeps(model, gammas, omegas, &[direction], options, progress)
 }
 
@@ -327,13 +331,14 @@ pub fn run_levels(
 /// whatever the number of threads; on failure, the error of the first
 /// failing sweep in that order.
 pub fn run_sweeps(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gammas: &[f64],
     omegas: &[f64],
     directions: &[SweepDirection],
     options: &RigOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<RigSweep>, SimulationError> {
+    let model = &model.as_normalised()?;
     use rayon::prelude::*;
     let jobs: Vec<(SweepDirection, f64)> = directions
         .iter()

@@ -122,7 +122,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             2.0 * PI * f_max,
             &ladder,
             args.tol,
-            nlsdof::multi_harmonic::settings_for(&model),
+            nlsdof::multi_harmonic::settings_for(&n),
             &ContinuationOptions::default(),
         )?;
         if !st.converged {

@@ -54,7 +54,8 @@ mod sweep;
 pub use equation::ResponseEquation;
 
 use crate::error::{ParameterError, SolveError};
-use crate::model::{Model, NormalisedModel};
+use crate::model::AsNormalised;
+use crate::model::NormalisedModel;
 
 /// Which steady-state equation to solve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -203,8 +204,14 @@ fn check_positive(name: &'static str, v: f64) -> Result<(), ParameterError> {
 
 impl ForcedResponse {
     /// Response of `model` to `γ cos Ωt` with `gamma` = γ (m/s², zero-to-peak, > 0).
-    pub fn new(model: &Model, gamma: f64, formulation: Formulation) -> Result<Self, SolveError> {
-        Self::from_normalised(&model.normalised()?, gamma, formulation)
+    /// `model` is either form ([`crate::Model`] or [`NormalisedModel`], see
+    /// [`AsNormalised`]).
+    pub fn new(
+        model: &(impl AsNormalised + ?Sized),
+        gamma: f64,
+        formulation: Formulation,
+    ) -> Result<Self, SolveError> {
+        Self::from_normalised(&model.as_normalised()?, gamma, formulation)
     }
 
     /// As [`ForcedResponse::new`] from mass-normalised parameters.
@@ -415,11 +422,11 @@ pub fn backbone(model: &NormalisedModel, amplitude: f64, formulation: Formulatio
 /// balance ([`Formulation::HarmonicBalance`]), valid near resonance for
 /// light damping.
 pub fn modulation_frequencies(
-    model: &Model,
+    model: &(impl AsNormalised + ?Sized),
     gamma: f64,
     amplitude: f64,
 ) -> Result<Option<(f64, f64)>, SolveError> {
-    let n = model.normalised()?;
+    let n = model.as_normalised()?;
     check_positive("gamma", gamma)?;
     check_positive("amplitude", amplitude)?;
     let wn = n.omega_n();
@@ -458,13 +465,14 @@ pub struct LevelResponse {
 /// phase-quadrature point; levels computed in parallel (rayon), results in
 /// the order of `gammas` (on failure, the first failing level's error).
 pub fn level_responses(
-    model: &Model,
+    model: &(impl AsNormalised + ?Sized),
     gammas: &[f64],
     omegas: &[f64],
     direction: SweepDirection,
     formulation: Formulation,
 ) -> Result<Vec<LevelResponse>, SolveError> {
     use rayon::prelude::*;
+    let model = &model.as_normalised()?;
     let levels: Vec<Result<LevelResponse, SolveError>> = gammas
         .par_iter()
         .map(|&gamma| {
@@ -487,13 +495,14 @@ pub fn level_responses(
 /// (rad/s), levels computed in parallel (rayon). Results are identical to
 /// calling [`ForcedResponse::sweep`] per level, in the order of `gammas`.
 pub fn sweep_levels(
-    model: &Model,
+    model: &(impl AsNormalised + ?Sized),
     gammas: &[f64],
     omegas: &[f64],
     direction: SweepDirection,
     formulation: Formulation,
 ) -> Result<Vec<Sweep>, SolveError> {
     use rayon::prelude::*;
+    let model = &model.as_normalised()?;
     let responses = gammas
         .iter()
         .map(|&g| ForcedResponse::new(model, g, formulation))

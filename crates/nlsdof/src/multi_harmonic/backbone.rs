@@ -19,7 +19,7 @@
 
 use super::system::{HarmonicSettings, HbSystem};
 use super::MhbError;
-use crate::model::NormalisedModel;
+use crate::model::AsNormalised;
 use nalgebra::{DMatrix, DVector};
 
 /// One point of the backbone.
@@ -38,11 +38,12 @@ pub struct BackbonePoint {
 /// Backbone with `h` harmonics at the first-harmonic amplitudes
 /// `amplitudes` (m, > 0).
 pub fn multi_harmonic_backbone(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     h: usize,
     amplitudes: &[f64],
     settings: HarmonicSettings,
 ) -> Result<Vec<BackbonePoint>, MhbError> {
+    let model = &model.as_normalised()?;
     let mut cons = *model;
     cons.delta = 0.0;
     cons.kappa = 0.0;

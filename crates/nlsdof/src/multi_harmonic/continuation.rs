@@ -39,7 +39,7 @@ use super::stability::{hill_floquet_exponents, FloquetExponents};
 use super::system::{HarmonicSettings, HbSystem};
 use super::{from_first_order, harmonic_amplitude, max_abs_displacement, MhbError};
 use crate::harmonic_balance::{ForcedResponse, Formulation};
-use crate::model::NormalisedModel;
+use crate::model::AsNormalised;
 use nalgebra::{DMatrix, DVector};
 
 /// Options of the continuation.
@@ -320,7 +320,7 @@ impl Cont<'_> {
 /// level `gamma`, starting from the smallest-amplitude first-order steady
 /// state at `omega_start`, with `h` harmonics.
 pub fn continue_in_omega(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gamma: f64,
     h: usize,
     omega_start: f64,
@@ -328,6 +328,7 @@ pub fn continue_in_omega(
     settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<Branch, MhbError> {
+    let model = &model.as_normalised()?;
     for (name, v) in [("omega_start", omega_start), ("omega_end", omega_end)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(MhbError::InvalidValue { name, value: v });
@@ -363,7 +364,7 @@ pub fn continue_in_omega(
 /// Continuation in γ from `gamma_start` to `gamma_end` at fixed `omega`,
 /// from the smallest-amplitude first-order steady state at `gamma_start`.
 pub fn continue_in_gamma(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     omega: f64,
     h: usize,
     gamma_start: f64,
@@ -371,6 +372,7 @@ pub fn continue_in_gamma(
     settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<Branch, MhbError> {
+    let model = &model.as_normalised()?;
     if !(omega.is_finite() && omega > 0.0) {
         return Err(MhbError::InvalidValue {
             name: "omega",

@@ -8,7 +8,8 @@ use super::{
     harmonic_amplitude, regularisation_check, ContinuationOptions, HarmonicSettings, HbSystem,
     MhbError,
 };
-use crate::{Model, SweepDirection};
+use crate::model::{AsNormalised, NormalisedModel};
+use crate::SweepDirection;
 
 /// The sweep of one level.
 #[derive(Debug, Clone)]
@@ -25,13 +26,13 @@ pub struct LevelSweep {
 /// zero-to-peak) over `omegas` (rad/s) in `direction`, with
 /// [`settings_for`] the model.
 pub fn level_sweeps(
-    model: &Model,
+    model: &(impl AsNormalised + ?Sized),
     gammas: &[f64],
     omegas: &[f64],
     direction: SweepDirection,
     h: usize,
 ) -> Result<Vec<LevelSweep>, MhbError> {
-    let n = model.normalised()?;
+    let n = model.as_normalised()?;
     let mut out = Vec::with_capacity(gammas.len());
     for &gamma in gammas {
         let s = sweep(
@@ -40,11 +41,11 @@ pub fn level_sweeps(
             h,
             omegas,
             direction,
-            settings_for(model),
+            settings_for(&n),
             &ContinuationOptions::default(),
         )?;
         let mut regularisation = None;
-        let mut sys = HbSystem::new(&n, gamma, h, settings_for(model))?;
+        let mut sys = HbSystem::new(&n, gamma, h, settings_for(&n))?;
         if sys.is_regularised() {
             if let Some(p) = s.points.iter().max_by(|a, b| {
                 harmonic_amplitude(&a.coefficients, 1)
@@ -74,9 +75,9 @@ pub fn level_sweeps(
 /// regularisation width is ε_rel = 1e-2 (library default 1e-3): the layer
 /// is resolved with ~10 times fewer samples (a Coulomb sweep through
 /// resonance: 41 s → see docs/multi-harmonic.md).
-pub fn settings_for(model: &Model) -> HarmonicSettings {
-    let negative = model.nonlinear_stiffness.is_some_and(|t| t.exponent < 0.0)
-        || model.nonlinear_damping.is_some_and(|t| t.exponent < 0.0);
+pub fn settings_for(model: &NormalisedModel) -> HarmonicSettings {
+    // an absent term has exponent 0 in the normalised form
+    let negative = model.rho < 0.0 || model.eta < 0.0;
     let mut s = HarmonicSettings::default();
     if negative {
         s.aliasing_tol = 1e-6;

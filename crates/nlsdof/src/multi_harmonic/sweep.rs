@@ -20,7 +20,7 @@ use super::stability::hill_floquet_exponents;
 use super::system::{HarmonicSettings, HbSystem};
 use super::{harmonic_amplitude, MhbError};
 use crate::harmonic_balance::{Jump, SweepDirection};
-use crate::model::NormalisedModel;
+use crate::model::AsNormalised;
 
 /// One swept point.
 #[derive(Debug, Clone, PartialEq)]
@@ -82,7 +82,7 @@ fn interpolate(b: &[BranchPoint], i: usize, omega: f64) -> Vec<f64> {
 /// Stepped-sine sweep over the strictly increasing `omegas` (rad/s) in
 /// `direction`, with `h` harmonics (points returned in sweep order).
 pub fn sweep(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gamma: f64,
     h: usize,
     omegas: &[f64],
@@ -90,6 +90,7 @@ pub fn sweep(
     settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<MhbSweep, MhbError> {
+    let model = &model.as_normalised()?;
     if omegas.len() < 2 {
         return Err(MhbError::InvalidValue {
             name: "number of sweep frequencies",

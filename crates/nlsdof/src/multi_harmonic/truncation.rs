@@ -15,7 +15,7 @@
 use super::continuation::{continue_in_omega, ContinuationOptions};
 use super::system::HarmonicSettings;
 use super::{max_abs_displacement, MhbError};
-use crate::model::NormalisedModel;
+use crate::model::AsNormalised;
 
 /// One H.
 #[derive(Debug, Clone, PartialEq)]
@@ -68,7 +68,7 @@ pub fn row_difference(a: &TruncationRow, b: &TruncationRow) -> f64 {
 
 /// The study for `harmonics` (increasing, each ≥ 1), see the module docs.
 pub fn truncation_study(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     gamma: f64,
     omega_min: f64,
     omega_max: f64,
@@ -77,6 +77,7 @@ pub fn truncation_study(
     settings: HarmonicSettings,
     opts: &ContinuationOptions,
 ) -> Result<TruncationStudy, MhbError> {
+    let model = &model.as_normalised()?;
     if !(tol.is_finite() && tol > 0.0) {
         return Err(MhbError::InvalidValue {
             name: "tol",

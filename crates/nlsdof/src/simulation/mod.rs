@@ -98,6 +98,7 @@ pub use crate::error::SimulationError;
 pub use upsampled::{simulate_upsampled, Upsampling};
 
 use crate::excitation::{Excitation, SampledInput};
+use crate::model::AsNormalised;
 use crate::model::NormalisedModel;
 
 /// Displacement (m) and velocity (m/s).
@@ -257,11 +258,12 @@ fn check_options(opts: &Options) -> Result<(), SimulationError> {
 /// `opts.decimation`-th state to `sink` (the state at sample 0 is the
 /// initial state). Memory is O(1) besides the input and what `sink` keeps.
 pub fn simulate<F: FnMut(Sample)>(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     input: &SampledInput<'_>,
     opts: &Options,
     sink: F,
 ) -> Result<Summary, SimulationError> {
+    let model = &model.as_normalised()?;
     check_model(model)?;
     check_options(opts)?;
     match opts.method {
@@ -287,10 +289,11 @@ pub struct Trajectory {
 /// [`simulate`] collecting x and v (and their times) into vectors sized
 /// exactly once.
 pub fn simulate_to_vec(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     input: &SampledInput<'_>,
     opts: &Options,
 ) -> Result<(Trajectory, Summary), SimulationError> {
+    let model = &model.as_normalised()?;
     let n = input.len().div_ceil(opts.decimation.max(1));
     let mut tr = Trajectory {
         index: Vec::with_capacity(n),
@@ -310,12 +313,13 @@ pub fn simulate_to_vec(
 /// Only x and v into caller-provided vectors (cleared first): the
 /// smallest-memory way to keep a whole response.
 pub fn simulate_into(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     input: &SampledInput<'_>,
     opts: &Options,
     x: &mut Vec<f64>,
     v: &mut Vec<f64>,
 ) -> Result<Summary, SimulationError> {
+    let model = &model.as_normalised()?;
     x.clear();
     v.clear();
     let n = input.len().div_ceil(opts.decimation.max(1));

@@ -8,7 +8,7 @@
 use super::{simulate, Method, Options, Sample, State, Summary};
 use crate::error::SimulationError;
 use crate::excitation::{upsample_cubic, SampledInput};
-use crate::model::NormalisedModel;
+use crate::model::AsNormalised;
 
 /// Options of [`simulate_upsampled`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,12 +24,13 @@ pub struct Upsampling {
 /// cubics; `sink` gets the state at every original sample (index `k`,
 /// time of that sample).
 pub fn simulate_upsampled(
-    model: &NormalisedModel,
+    model: &(impl AsNormalised + ?Sized),
     values: &[f64],
     grid: (f64, f64, f64),
     opts: &Upsampling,
     sink: &mut dyn FnMut(Sample),
 ) -> Result<Summary, SimulationError> {
+    let model = &model.as_normalised()?;
     const CHUNK: usize = 1 << 16;
     let (gain, t0, fs) = grid;
     let factor = opts.factor;

@@ -44,6 +44,27 @@ fn draw_err<E: std::fmt::Display>(e: E) -> FigureError {
     }
 }
 
+/// White background and the centred figure title (`w` pixels wide);
+/// returns the area below the title.
+fn titled<'a>(
+    root: &DrawingArea<BitMapBackend<'a>, Shift>,
+    title: &str,
+    w: u32,
+) -> Result<DrawingArea<BitMapBackend<'a>, Shift>, FigureError> {
+    root.fill(&WHITE).map_err(draw_err)?;
+    let (top, body) = root.split_vertically(TITLE_H);
+    top.draw(&Text::new(
+        title.to_string(),
+        ((w / 2) as i32, (TITLE_H / 2) as i32),
+        (FONT, 22)
+            .into_font()
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Center, VPos::Center)),
+    ))
+    .map_err(draw_err)?;
+    Ok(body)
+}
+
 /// Viridis (matplotlib), 9 anchors, linear interpolation; `u` in [0, 1].
 pub fn viridis(u: f64) -> [u8; 3] {
     const A: [[f64; 3]; 9] = [
@@ -224,17 +245,7 @@ pub fn heatmap_png(
     let bar_rect;
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(draw_err)?;
-        let (top, body) = root.split_vertically(TITLE_H);
-        top.draw(&Text::new(
-            title.to_string(),
-            ((w / 2) as i32, (TITLE_H / 2) as i32),
-            (FONT, 22)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Center, VPos::Center)),
-        ))
-        .map_err(draw_err)?;
+        let body = titled(&root, title, w)?;
         let (maps, bar) = body.split_horizontally(PANEL_W * np);
         for ((label, s), area) in panels.iter().zip(maps.split_evenly((1, panels.len()))) {
             let (lo, hi, _) = band(s, f_range);
@@ -382,17 +393,7 @@ pub fn waterfall_png(
     let mut buf = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(draw_err)?;
-        let (top, body) = root.split_vertically(TITLE_H);
-        top.draw(&Text::new(
-            title.to_string(),
-            ((w / 2) as i32, (TITLE_H / 2) as i32),
-            (FONT, 22)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Center, VPos::Center)),
-        ))
-        .map_err(draw_err)?;
+        let body = titled(&root, title, w)?;
         for ((label, s), area) in panels.iter().zip(body.split_evenly((1, panels.len()))) {
             draw_waterfall(&area, label, s, f_range, vmax).map_err(draw_err)?;
         }

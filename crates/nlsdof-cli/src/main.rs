@@ -3,7 +3,6 @@
 
 mod cmd;
 mod error;
-mod plot;
 
 use clap::{Parser, Subcommand};
 use error::CliError;
@@ -142,7 +141,7 @@ fn main() {
         }
         eprintln!(
             "nlsdof: error: {} (see --help)",
-            error::compact_numbers(&msg)
+            nlsdof_report::compact_numbers(&msg)
         );
         std::process::exit(2);
     });
@@ -154,7 +153,7 @@ fn main() {
     }
     // `fit --plot` writes SVG (checked here: cmd/fit.rs is being rewritten).
     if let Command::Fit(a) = &cli.command {
-        if let Err(e) = plot::check_svg_name(a.plot.as_deref()) {
+        if let Err(e) = nlsdof_report::frf_plot::check_svg_name(a.plot.as_deref()) {
             eprintln!("nlsdof: error: {e}");
             std::process::exit(2);
         }
@@ -186,7 +185,10 @@ fn main() {
     });
     if let Err(e) = result {
         nlsdof_io::atomic::cleanup_all();
-        eprintln!("nlsdof: error: {}", error::compact_numbers(&e.to_string()));
+        eprintln!(
+            "nlsdof: error: {}",
+            nlsdof_report::compact_numbers(&e.to_string())
+        );
         std::process::exit(2);
     }
 }

@@ -437,3 +437,116 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }
+
+fn folder_error(out: &Path, message: impl std::fmt::Display) -> IoError {
+    IoError::OutputFolder {
+        path: out.to_path_buf(),
+        message: message.to_string(),
+    }
+}
+
+/// Whether `out` may become an output folder: absent, or an empty
+/// folder, or any folder when `force`.
+pub fn check_out_dir(out: &Path, force: bool) -> Result<(), IoError> {
+    match std::fs::metadata(out) {
+        Err(_) => Ok(()),
+        Ok(m) if !m.is_dir() => Err(folder_error(out, "exists and is not a directory")),
+        Ok(_) => {
+            let non_empty = std::fs::read_dir(out)
+                .map_err(|e| folder_error(out, e))?
+                .next()
+                .is_some();
+            if non_empty && !force {
+                Err(folder_error(
+                    out,
+                    "directory exists and is not empty (use --force to replace it)",
+                ))
+            } else {
+                Ok(())
+            }
+        }
+    }
+}
+
+/// A whole output folder built atomically: a hidden sibling of the target
+/// (`.NAME.PID.partial`, with a `tables` subfolder), registered for the
+/// Ctrl-C cleanup, renamed over the target by [`StagedDir::commit`] and
+/// removed on drop unless committed.
+pub struct StagedDir {
+    dir: Option<PathBuf>,
+}
+
+impl StagedDir {
+    /// Starts the folder that will become `out`.
+    pub fn create(out: &Path) -> Result<Self, IoError> {
+        let parent = out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let name = out
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .ok_or_else(|| folder_error(out, "not a folder name"))?;
+        if !parent.is_dir() {
+            return Err(folder_error(
+                out,
+                format!("parent folder {} does not exist", parent.display()),
+            ));
+        }
+        let dir = parent.join(format!(".{name}.{}.partial", std::process::id()));
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).ok();
+        }
+        register_partial_dir(&dir);
+        std::fs::create_dir_all(dir.join("tables")).map_err(|source| IoError::Write {
+            path: dir.clone(),
+            source,
+        })?;
+        Ok(Self { dir: Some(dir) })
+    }
+
+    /// The folder to write into.
+    pub fn path(&self) -> &Path {
+        self.dir.as_deref().expect("present until commit")
+    }
+
+    /// Renames the finished folder to `out` (replacing an existing one).
+    pub fn commit(mut self, out: &Path, force: bool) -> Result<(), IoError> {
+        let dir = self.dir.take().expect("present until commit");
+        let fail = |e: std::io::Error, dir: &Path| {
+            std::fs::remove_dir_all(dir).ok();
+            IoError::Write {
+                path: out.to_path_buf(),
+                source: e,
+            }
+        };
+        if out.exists() {
+            // checked at start: empty, or --force
+            check_out_dir(out, force).inspect_err(|_| {
+                std::fs::remove_dir_all(&dir).ok();
+            })?;
+            let old = dir.with_extension("old");
+            std::fs::rename(out, &old).map_err(|e| fail(e, &dir))?;
+            if let Err(e) = std::fs::rename(&dir, out) {
+                std::fs::rename(&old, out).ok();
+                return Err(fail(e, &dir));
+            }
+            std::fs::remove_dir_all(&old).ok();
+        } else {
+            std::fs::rename(&dir, out).map_err(|e| fail(e, &dir))?;
+        }
+        // Renamed (or removed on failure above, where a Ctrl-C cleanup of
+        // the vanished path is harmless).
+        unregister_partial_dir(&dir);
+        Ok(())
+    }
+}
+
+impl Drop for StagedDir {
+    fn drop(&mut self) {
+        if let Some(d) = self.dir.take() {
+            std::fs::remove_dir_all(&d).ok();
+            unregister_partial_dir(&d);
+        }
+    }
+}

@@ -22,6 +22,9 @@ pub enum IoError {
         path: PathBuf,
         source: nlsdof::ParameterError,
     },
+    /// An output folder that cannot be used or created.
+    #[error("--out {path}: {message}")]
+    OutputFolder { path: PathBuf, message: String },
     #[error("{path}: line {line}: {message}")]
     Data {
         path: PathBuf,

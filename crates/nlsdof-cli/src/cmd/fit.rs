@@ -3,22 +3,22 @@
 //! helpers shared with `nlsdof compare` (data loading, options, reports).
 
 use crate::error::CliError;
-use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN};
-use nlsdof::identification::search::{best_integer_fit, IntegerPair};
+use nlsdof::identification::models::BETA;
+use nlsdof::identification::search::best_integer_fit;
 use nlsdof::identification::{
-    fit, identify, phase_quadrature_table, predicted_jumps, Dataset, FitOptions, FitPlan,
-    FitResult, FitSpec, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
-    PhaseConvention, SignChoice, Status, Weighting, N_PARAMS, PARAM_NAMES,
+    fit, identify, Dataset, FitOptions, FitPlan, FitSpec, GainChoice, JumpChoice, ModelKind,
+    PhaseChoice, PhaseConvention, SignChoice, Weighting,
 };
-use nlsdof::identification::{Parameter, Parameters};
-use nlsdof::{Model, SweepDirection};
+use nlsdof::SweepDirection;
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
-use serde_json::{json, Value};
-use std::f64::consts::PI;
-use std::fmt::Write as _;
+use serde_json::json;
 use std::path::{Path, PathBuf};
 
 pub use super::progress::progress_bar;
+pub use nlsdof_report::fit::{
+    fit_svg, identification_json, identification_text, integer_pairs_json, integer_pairs_text,
+    model_file_text, pq_text, result_json, result_text,
+};
 
 /// `--weighting` (see [`Weighting`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -205,109 +205,6 @@ pub struct Args {
     pub json: bool,
     #[command(flatten)]
     pub pr: super::sign::PrArgs,
-}
-
-/// Minimal SVG: measured amplitudes (dots) and the model's branch-following
-/// amplitudes at the same steps (lines), one colour per curve.
-pub fn fit_svg(data: &Dataset, res: &FitResult) -> String {
-    const W: f64 = 900.0;
-    const H: f64 = 560.0;
-    const L: f64 = 80.0;
-    const R: f64 = 170.0;
-    const T: f64 = 30.0;
-    const B: f64 = 50.0;
-    const COLOURS: [&str; 9] = [
-        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
-        "#17becf",
-    ];
-    let (mut f0, mut f1, mut a1) = (f64::INFINITY, 0.0f64, 0.0f64);
-    for c in &data.curves {
-        for (&w, &a) in c.omegas.iter().zip(&c.amplitudes) {
-            f0 = f0.min(hz(w));
-            f1 = f1.max(hz(w));
-            a1 = a1.max(a);
-        }
-    }
-    a1 = a1.max(res.model_amplitudes.iter().cloned().fold(0.0, f64::max)) * 1.05;
-    if !(a1 > 0.0) {
-        a1 = 1.0;
-    }
-    let x = |f: f64| L + (f - f0) / (f1 - f0).max(1e-300) * (W - L - R);
-    let y = |a: f64| H - B - a / a1 * (H - T - B);
-    let mut s = format!("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
-    let _ = writeln!(s, "<text x=\"{}\" y=\"18\" text-anchor=\"middle\">nlsdof fit: {} (dots: data, lines: model), cost {:.4e}</text>", W / 2.0, res.kind, res.cost);
-    let _ = writeln!(
-        s,
-        "<rect x=\"{L}\" y=\"{T}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>",
-        W - L - R,
-        H - T - B
-    );
-    for k in 0..=5 {
-        let f = f0 + (f1 - f0) * k as f64 / 5.0;
-        let a = a1 * k as f64 / 5.0;
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{f:.1}</text>",
-            x(f),
-            H - B + 18.0
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{a:.2e}</text>",
-            L - 6.0,
-            y(a) + 4.0
-        );
-    }
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frequency [Hz]</text>",
-        L + (W - L - R) / 2.0,
-        H - 12.0
-    );
-    let _ = writeln!(s, "<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">amplitude [m]</text>", H / 2.0, H / 2.0);
-    let mut off = 0;
-    for (i, c) in data.curves.iter().enumerate() {
-        let col = COLOURS[i % COLOURS.len()];
-        let n = c.omegas.len();
-        let pts: Vec<String> = (0..n)
-            .map(|k| {
-                format!(
-                    "{:.2},{:.2}",
-                    x(hz(c.omegas[k])),
-                    y(res.model_amplitudes[off + k])
-                )
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            "<polyline fill=\"none\" stroke=\"{col}\" stroke-width=\"1.5\" points=\"{}\"/>",
-            pts.join(" ")
-        );
-        let stride = (n / 300).max(1);
-        for k in (0..n).step_by(stride) {
-            let _ = writeln!(
-                s,
-                "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"1.8\" fill=\"{col}\"/>",
-                x(hz(c.omegas[k])),
-                y(c.amplitudes[k])
-            );
-        }
-        let dir = if c.direction == SweepDirection::Up {
-            "up"
-        } else {
-            "down"
-        };
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{}\" fill=\"{col}\">{} ({dir})</text>",
-            W - R + 12.0,
-            T + 16.0 * (i as f64 + 1.0),
-            c.level
-        );
-        off += n;
-    }
-    s.push_str("</svg>\n");
-    s
 }
 
 fn fit_long_help() -> String {
@@ -552,103 +449,6 @@ fn dummy_dataset() -> Dataset {
     Dataset::from_records(&recs).expect("valid dummy data")
 }
 
-/// JSON of the stages of [`identify`] (equation error, landscape,
-/// phase convention, gain decision, candidates).
-pub fn identification_json(id: &Identification) -> Value {
-    let l = &id.landscape;
-    let minima: Vec<Value> = l
-        .minima
-        .iter()
-        .take(20)
-        .map(|&(i, j)| json!({"rho": l.rho[i], "eta": l.eta[j], "cost": l.at(i, j)}))
-        .collect();
-    let prof = |p: Option<nlsdof::identification::landscape::ProfileInterval>| {
-        p.map(|p| json!([p.lower, p.upper]))
-    };
-    json!({
-        "equation_error": {"theta": id.equation_error.theta.to_array(), "cost": id.equation_error.cost,
-                            "residuals": id.equation_error.n_residuals},
-        "landscape": {"rho": [l.rho.first(), l.rho.last(), l.rho.len()],
-                      "eta": [l.eta.first(), l.eta.last(), l.eta.len()],
-                      "with_phase": l.with_phase, "minima": minima},
-        "profile_ci95": {"rho": prof(id.rho_profile), "eta": prof(id.eta_profile),
-                         "note": "profile likelihood of the equation-error cost over the landscape grid; null bound = open at the grid edge"},
-        "phase_convention": id.phase.map(|p| json!({
-            "sign": if p.sign > 0.0 { "lag" } else { "lead" },
-            "offset_deg": p.offset.to_degrees(), "delay_s": p.delay})),
-        "gain_test": id.gain_test.map(|g| json!({"gain": g.gain, "f_statistic": g.f_statistic, "freed": g.freed})),
-        "jump_weight": id.jump_weight,
-        "candidates": id.candidates.iter().map(|c| json!({
-            "rho": c.rho, "eta": c.eta, "ee_cost": c.ee_cost, "sign": c.sign.name(),
-            "objective": c.oe.as_ref().ok(), "error": c.oe.as_ref().err()})).collect::<Vec<_>>(),
-    })
-}
-
-/// Text lines of the stages of [`identify`].
-pub fn identification_text(id: &Identification) -> String {
-    let mut s = String::new();
-    let l = &id.landscape;
-    writeln!(
-        s,
-        "stages: equation error ({}) -> landscape {}x{} (rho {:.3}..{:.3}, eta {:.3}..{:.3}), {} grid minima -> output error from the best {}",
-        if l.with_phase { "amplitude and phase" } else { "amplitude" },
-        l.rho.len(),
-        l.eta.len(),
-        l.rho[0],
-        l.rho[l.rho.len() - 1],
-        l.eta[0],
-        l.eta[l.eta.len() - 1],
-        l.minima.len(),
-        id.candidates.len()
-    )
-    .ok();
-    if let Some(p) = id.phase {
-        writeln!(
-            s,
-            "phase convention: {} {:+.2} deg{} (measured phase = {}displacement lag + offset)",
-            if p.sign > 0.0 { "lag" } else { "lead" },
-            p.offset.to_degrees(),
-            if p.delay != 0.0 {
-                format!(" + delay {:.3e} s", p.delay)
-            } else {
-                String::new()
-            },
-            if p.sign > 0.0 { "" } else { "-" }
-        )
-        .ok();
-    }
-    if let Some(g) = id.gain_test {
-        writeln!(
-            s,
-            "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {})",
-            if g.freed { "free" } else { "held at 1" },
-            g.gain,
-            g.f_statistic,
-            nlsdof::identification::identify::GAIN_F_THRESHOLD
-        )
-        .ok();
-    }
-    if id.jump_weight > 0.0 {
-        writeln!(s, "jump residuals: lambda = {}", id.jump_weight).ok();
-    }
-    let f = |p: Option<nlsdof::identification::landscape::ProfileInterval>| {
-        p.map(|p| {
-            format!(
-                "[{}, {}]",
-                p.lower.map_or("open".into(), |v| format!("{v:.3}")),
-                p.upper.map_or("open".into(), |v| format!("{v:.3}"))
-            )
-        })
-    };
-    if let Some(r) = f(id.rho_profile) {
-        writeln!(s, "profile 95 % interval (equation error) rho: {r}").ok();
-    }
-    if let Some(e) = f(id.eta_profile) {
-        writeln!(s, "profile 95 % interval (equation error) eta: {e}").ok();
-    }
-    s
-}
-
 pub fn parse_model_kind(name: &str) -> Result<ModelKind, CliError> {
     ModelKind::parse(name).ok_or_else(|| {
         let all: Vec<&str> = ModelKind::ALL.iter().map(|k| k.name()).collect();
@@ -657,317 +457,6 @@ pub fn parse_model_kind(name: &str) -> Result<ModelKind, CliError> {
             all.join(", ")
         ))
     })
-}
-
-fn hz(w: f64) -> f64 {
-    w / (2.0 * PI)
-}
-
-fn status_name(s: Status) -> &'static str {
-    match s {
-        Status::Absent => "absent",
-        Status::Fixed(_) => "fixed",
-        Status::Free => "free",
-    }
-}
-
-/// The `--out` model file of a fit: a header (model, cost, a note when the
-/// fit is not trustworthy, the forcing gain, the mass convention) and the
-/// physical model for `mass` (1 kg when not given).
-pub fn model_file_text(res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
-    let model = physical(res, mass.unwrap_or(1.0))?;
-    let mut text = format!(
-        "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
-        res.kind,
-        res.cost,
-        if res.warning().is_some() {
-            " (NOT CONVERGED or not identifiable: see the fit report)"
-        } else {
-            ""
-        },
-        res.theta[GAIN]
-    );
-    if mass.is_none() {
-        text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
-    }
-    text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
-    Ok(text)
-}
-
-/// Physical model for mass `m` (β, κ scaled; gain is not part of it).
-pub fn physical(res: &FitResult, m: f64) -> Result<Model, CliError> {
-    Ok(res.model().to_physical(m)?)
-}
-
-/// JSON of one fit.
-pub fn result_json(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<Value, CliError> {
-    let mut params = Vec::new();
-    let valid = res.intervals_valid();
-    for j in 0..N_PARAMS {
-        if res.status[j] == Status::Absent {
-            continue;
-        }
-        let unc = res.uncertainty.as_ref().filter(|_| valid).and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == PARAM_NAMES[j])
-                .map(|k| (u, k))
-        });
-        let mass_scaled = Parameter::ALL[j].mass_scaled();
-        let m = mass.unwrap_or(1.0);
-        let phys = |v: f64| if mass_scaled { v * m } else { v };
-        params.push(json!({
-            "name": PARAM_NAMES[j],
-            "status": status_name(res.status[j]),
-            "value": res.theta[j],
-            "std_error": unc.map(|(u, k)| u.std_errors[k]),
-            "ci95": unc.map(|(u, k)| [u.lower[k], u.upper[k]]),
-            "physical": { "name": Parameter::ALL[j].info().physical_name, "unit": Parameter::ALL[j].info().physical_unit, "value": phys(res.theta[j]),
-                          "ci95": unc.map(|(u, k)| [phys(u.lower[k]), phys(u.upper[k])]) },
-        }));
-    }
-    let jumps = predicted_jumps(data, &res.theta)?;
-    let levels: Vec<Value> = res
-        .levels
-        .iter()
-        .zip(data.curves.iter().zip(&jumps))
-        .map(|(l, (c, pj))| {
-            json!({
-                "level": l.level, "gamma": l.gamma,
-                "sweep": if l.direction == SweepDirection::Up { "up" } else { "down" },
-                "points": l.points, "rms": l.rms, "rms_normalised": l.rms_normalised,
-                "measured_jump_f_hz": c.measured_jump(2.0).map(hz),
-                "model_jump_f_hz": pj.map(hz),
-            })
-        })
-        .collect();
-    let pq: Vec<Value> = phase_quadrature_table(data, &res.theta)?
-        .iter()
-        .map(|r| {
-            let (df, da) = r.differences_percent();
-            json!({
-                "level": r.level, "gamma": r.gamma, "measured_from": r.measured_from,
-                "measured_f_hz": hz(r.measured_omega), "measured_amplitude": r.measured_amplitude,
-                "model_f_hz": r.model_omega.map(hz), "model_amplitude": r.model_amplitude,
-                "diff_f_percent": df, "diff_amplitude_percent": da,
-            })
-        })
-        .collect();
-    let minima: Vec<Value> = res
-        .minima
-        .iter()
-        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
-        .collect();
-    let stiffness_sign = (res.status[BETA] != Status::Absent).then(|| {
-        if res.theta[BETA] < 0.0 {
-            "softening"
-        } else {
-            "hardening"
-        }
-    });
-    Ok(json!({
-        "model": res.kind.name(),
-        "stiffness_sign": stiffness_sign,
-        "converged": res.converged,
-        "at_bounds": res.at_bounds,
-        "unidentifiable": res.unidentifiable,
-        "intervals_valid": valid,
-        "warning": res.warning(),
-        "phase_cost": res.phase_cost,
-        "parameters": params,
-        "parameter_order": PARAM_NAMES,
-        "theta": res.theta.to_array(),
-        "mass": mass,
-        "mass_note": if mass.is_none() { Some("no mass given: physical values are per unit mass (m = 1 kg)") } else { None },
-        "cost": res.cost,
-        "rms_normalised": res.rms_normalised(),
-        "aic": res.aic(), "bic": res.bic(),
-        "points": res.n_points, "free_parameters": res.n_free,
-        "termination": res.termination.name(),
-        "iterations": res.iterations,
-        "correlation": res.uncertainty.as_ref().filter(|_| valid).map(|u| json!({"names": u.names, "matrix": u.correlation})),
-        "minima": minima,
-        "levels": levels,
-        "phase_quadrature": pq,
-    }))
-}
-
-/// The parameter block shared by the sweep and phase-resonance fit reports:
-/// a note when no mass is given, one line per parameter (status, value,
-/// standard error, 95 % interval, physical value) and `f_n`, `zeta`.
-pub fn parameter_table_text(
-    s: &mut String,
-    theta: &Parameters,
-    status: &[Status; N_PARAMS],
-    unc: Option<&nlsdof::identification::uncertainty::Uncertainty>,
-    mass: Option<f64>,
-) {
-    let m = mass.unwrap_or(1.0);
-    if mass.is_none() {
-        writeln!(
-            s,
-            "note: no mass given (--mass); physical values are per unit mass (m = 1 kg)"
-        )
-        .ok();
-    }
-    writeln!(
-        s,
-        "{:<6} {:>7} {:>15} {:>12} {:>33}   {}",
-        "param", "status", "value", "std error", "95 % interval", "physical"
-    )
-    .ok();
-    for j in 0..N_PARAMS {
-        if status[j] == Status::Absent {
-            continue;
-        }
-        let u_k = unc.and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == PARAM_NAMES[j])
-                .map(|k| (u, k))
-        });
-        let (se, ci) = match u_k {
-            Some((u, k)) => (
-                format!("{:.4e}", u.std_errors[k]),
-                format!("[{:.6e}, {:.6e}]", u.lower[k], u.upper[k]),
-            ),
-            None => ("-".into(), "-".into()),
-        };
-        let phys = if Parameter::ALL[j].mass_scaled() {
-            theta[j] * m
-        } else {
-            theta[j]
-        };
-        writeln!(
-            s,
-            "{:<6} {:>7} {:>15.8e} {:>12} {:>33}   {} = {:.8e} {}",
-            PARAM_NAMES[j],
-            status_name(status[j]),
-            theta[j],
-            se,
-            ci,
-            Parameter::ALL[j].info().physical_name,
-            phys,
-            Parameter::ALL[j].info().physical_unit
-        )
-        .ok();
-    }
-    let wn = theta[ALPHA].sqrt();
-    writeln!(
-        s,
-        "f_n = {:.6} Hz, zeta = {:.6e}",
-        hz(wn),
-        theta[DELTA] / (2.0 * wn)
-    )
-    .ok();
-}
-
-/// Human-readable report of one fit.
-pub fn result_text(data: &Dataset, res: &FitResult, mass: Option<f64>) -> Result<String, CliError> {
-    let mut s = String::new();
-    if let Some(w) = res.warning() {
-        writeln!(s, "{w}").ok();
-    }
-    writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
-    writeln!(
-        s,
-        "termination: {} after {} iterations",
-        res.termination, res.iterations
-    )
-    .ok();
-    parameter_table_text(
-        &mut s,
-        &res.theta,
-        &res.status,
-        res.uncertainty.as_ref().filter(|_| res.intervals_valid()),
-        mass,
-    );
-    if res.uncertainty.is_some() && !res.intervals_valid() {
-        writeln!(
-            s,
-            "intervals: not shown (the fit is not trustworthy, see the first line)"
-        )
-        .ok();
-    } else if res.uncertainty.is_none() {
-        writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
-    }
-    let jumps = predicted_jumps(data, &res.theta)?;
-    writeln!(
-        s,
-        "\nper level: {:<10} {:>10} {:>5} {:>12} {:>14} {:>14} {:>14}",
-        "level", "gamma", "sweep", "RMS [m]", "RMS a/gamma", "jump meas [Hz]", "jump model [Hz]"
-    )
-    .ok();
-    for (l, (c, pj)) in res.levels.iter().zip(data.curves.iter().zip(&jumps)) {
-        let f = |v: Option<f64>| {
-            v.map(|w| format!("{:.3}", hz(w)))
-                .unwrap_or_else(|| "-".into())
-        };
-        writeln!(
-            s,
-            "           {:<10} {:>10.5} {:>5} {:>12.4e} {:>14.4e} {:>14} {:>14}",
-            l.level,
-            l.gamma,
-            if l.direction == SweepDirection::Up {
-                "up"
-            } else {
-                "down"
-            },
-            l.rms,
-            l.rms_normalised,
-            f(c.measured_jump(2.0)),
-            f(*pj)
-        )
-        .ok();
-    }
-    s.push_str(&pq_text(data, res)?);
-    if res.minima.len() > 1 || res.minima.first().map_or(false, |m| m.count > 1) {
-        writeln!(s, "\ndistinct local minima ({}):", res.minima.len()).ok();
-        for (i, mm) in res.minima.iter().enumerate().take(20) {
-            let free: Vec<String> = (0..N_PARAMS)
-                .filter(|&j| res.status[j] == Status::Free)
-                .map(|j| format!("{}={:.5e}", PARAM_NAMES[j], mm.theta[j]))
-                .collect();
-            writeln!(
-                s,
-                "  #{:<3} cost {:.6e}  starts {:>4}  {}  {}",
-                i + 1,
-                mm.cost,
-                mm.count,
-                mm.termination,
-                free.join(" ")
-            )
-            .ok();
-        }
-    }
-    Ok(s)
-}
-
-/// Phase-quadrature table (Table 8 analogue) as text.
-pub fn pq_text(data: &Dataset, res: &FitResult) -> Result<String, CliError> {
-    let mut s = String::new();
-    writeln!(s, "\nphase quadrature (model) vs measured ({}): {:<10} {:>12} {:>12} {:>9} {:>12} {:>12} {:>9}", res.kind, "level", "f_meas [Hz]", "f_model", "diff %", "a_meas [m]", "a_model", "diff %").ok();
-    for r in phase_quadrature_table(data, &res.theta)? {
-        let (df, da) = r.differences_percent();
-        let o =
-            |v: Option<f64>, p: usize| v.map(|x| format!("{x:.p$}")).unwrap_or_else(|| "-".into());
-        writeln!(
-            s,
-            "  ({:<5})  {:<10} {:>12.4} {:>12} {:>9} {:>12.5e} {:>12} {:>9}",
-            r.measured_from,
-            r.level,
-            hz(r.measured_omega),
-            o(r.model_omega.map(hz), 4),
-            o(df, 2),
-            r.measured_amplitude,
-            r.model_amplitude
-                .map(|a| format!("{a:.5e}"))
-                .unwrap_or_else(|| "-".into()),
-            o(da, 2)
-        )
-        .ok();
-    }
-    Ok(s)
 }
 
 pub fn resolve_mass(
@@ -1010,7 +499,7 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
     nlsdof_io::atomic::check_targets(&targets)?;
     let landscape_kind = match &args.landscape {
         None => None,
-        Some(p) => Some(super::landscape_plot::kind_of(p)?),
+        Some(p) => Some(nlsdof_report::landscape::kind_of(p)?),
     };
     let data = args.data.load()?;
     let (pb, on_progress) = super::progress::stage_bar(kind.name());
@@ -1027,7 +516,7 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         files.push((p.clone(), fit_svg(&id.data, res).into_bytes()));
     }
     if let (Some(p), Some(k)) = (&args.landscape, landscape_kind) {
-        files.push((p.clone(), super::landscape_plot::render(&id, k)?));
+        files.push((p.clone(), nlsdof_report::landscape::render(&id, k)?));
     }
     for (p, bytes) in &files {
         nlsdof_io::atomic::write_atomic(p, bytes)?;
@@ -1049,7 +538,8 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    use super::sign::{fit_sweep_signed, sign_trials_json, sign_trials_text, SignArg};
+    use super::sign::{fit_sweep_signed, SignArg};
+    use nlsdof_report::fit::{sign_trials_json, sign_trials_text};
     // (`fit --phase-resonance` is dispatched to `phase_resonance::run_fit_verb`)
     let sign = args.pr.sign.resolve(args.pr.softening)?;
     if let Some(l) = args.jump_weight {
@@ -1184,33 +674,4 @@ pub fn run(args: Args) -> Result<(), CliError> {
         print!("{s}");
     }
     Ok(())
-}
-
-/// JSON of an integer search's pairs (`--integer`).
-pub fn integer_pairs_json(pairs: &[IntegerPair]) -> Value {
-    Value::Array(
-        pairs
-            .iter()
-            .map(|p| match &p.outcome {
-                Ok((cost, t)) => {
-                    json!({"rho": p.rho, "eta": p.eta, "cost": cost, "termination": t.name()})
-                }
-                Err(e) => json!({"rho": p.rho, "eta": p.eta, "error": e}),
-            })
-            .collect(),
-    )
-}
-
-/// Text of an integer search's pairs (`--integer`).
-pub fn integer_pairs_text(pairs: &[IntegerPair]) -> String {
-    let mut s = String::from("\ninteger exponent pairs (rho, eta): cost\n");
-    let show = |v: Option<i64>| v.map_or_else(|| "null".to_string(), |v| v.to_string());
-    for p in pairs {
-        let outcome = match &p.outcome {
-            Ok((cost, _)) => format!("{cost:.6e}"),
-            Err(e) => Value::String(e.clone()).to_string(),
-        };
-        writeln!(s, "  ({}, {}): {outcome}", show(p.rho), show(p.eta)).ok();
-    }
-    s
 }

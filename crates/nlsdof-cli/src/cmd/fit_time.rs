@@ -5,13 +5,13 @@
 use crate::error::CliError;
 use nlsdof::identification::time_domain::{
     check_ranges, fit_time_domain, predict, uniform_fs, Prediction, SampleRange, TimeFitOptions,
-    TimeRecord, INIT_WINDOW, MAX_EXPONENT, TIME_PARAM_NAMES,
+    TimeRecord,
 };
 use nlsdof::identification::ModelKind;
 use nlsdof_io::model_file::{model_to_toml, signal_to_toml, SignalMap};
 use nlsdof_io::signal_file::CsvWriter;
 use nlsdof_io::table_file::read_columns;
-use serde_json::json;
+use nlsdof_report::time_fit as report;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -236,117 +236,22 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         w.commit()?;
     }
-    let unc = res.uncertainty.as_ref();
-    let at_bounds: Vec<&str> = res
-        .free
-        .iter()
-        .filter(|&&p| {
-            let v = res.theta[p];
-            match TIME_PARAM_NAMES[p] {
-                "delta" | "kappa" => v == 0.0,
-                "rho" | "eta" => v == 0.0 || v == MAX_EXPONENT,
-                _ => false,
-            }
-        })
-        .map(|&p| TIME_PARAM_NAMES[p])
-        .collect();
-    let warning = if !res.termination.converged() {
-        Some(format!("the fit did not converge ({})", res.termination))
-    } else if unc.is_none() {
-        Some("J'J is singular at the optimum: a parameter is not identifiable, no intervals".into())
-    } else {
-        None
+    let input = a.input.display().to_string();
+    let run = report::TimeFitRun {
+        input: &input,
+        kind,
+        fs,
+        samples: u.len(),
+        range,
+        fit: &res,
+        predictions: &preds,
+        fit_s,
     };
     if a.json {
-        let params: serde_json::Map<String, serde_json::Value> = TIME_PARAM_NAMES
-            .iter()
-            .zip(res.theta.iter())
-            .map(|(n, v)| (n.to_string(), json!(v)))
-            .collect();
-        let intervals: Vec<_> = unc
-            .map(|u| {
-                (0..u.names.len())
-                    .map(|k| {
-                        json!({"name": u.names[k], "value": u.values[k], "std_error": u.std_errors[k],
-                               "lower": u.lower[k], "upper": u.upper[k]})
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
-        let v = json!({
-            "input": a.input,
-            "model": kind.name(),
-            "fs_hz": fs,
-            "samples": u.len(),
-            "parameters": params,
-            "free": res.free.iter().map(|&p| TIME_PARAM_NAMES[p]).collect::<Vec<_>>(),
-            "intervals_95": intervals,
-            "converged": res.termination.converged(),
-            "termination": res.termination.name(),
-            "iterations": res.iterations,
-            "warning": warning,
-            "at_bounds": at_bounds,
-            "estimation": {
-                "range": [range.start, range.end],
-                "rms": res.rms,
-                "start_rms": res.start_rms,
-            },
-            "tests": preds.iter().map(|p| json!({
-                "range": [p.range.start, p.range.end],
-                "rms": p.rms,
-                "score_x1000": 1000.0 * p.rms,
-                "init_window": INIT_WINDOW,
-                "initial": {"x0": p.initial.x, "v0": p.initial.v},
-            })).collect::<Vec<_>>(),
-            "fit_s": fit_s,
-            "total_s": t_start.elapsed().as_secs_f64(),
-        });
-        println!("{v}");
+        let total_s = t_start.elapsed().as_secs_f64();
+        println!("{}", report::json(&run, total_s));
     } else {
-        if let Some(w) = &warning {
-            println!("WARNING: {w}");
-        }
-        if !at_bounds.is_empty() {
-            println!(
-                "note: at a bound (its interval is not meaningful): {}",
-                at_bounds.join(", ")
-            );
-        }
-        println!(
-            "fit-time {kind} on {} samples {}:{} at {fs} Hz: RMS output error {:.6e} (equation-error start {:.6e}), {} ({} iterations) in {:.2} s",
-            range.len(),
-            range.start,
-            range.end,
-            res.rms,
-            res.start_rms,
-            res.termination,
-            res.iterations,
-            fit_s
-        );
-        println!("  parameter        value                 95 % interval");
-        for (k, name) in TIME_PARAM_NAMES.iter().enumerate() {
-            let free = res.free.contains(&k);
-            let iv = match (free, unc) {
-                (true, Some(u)) => {
-                    let i = u.names.iter().position(|n| n == name).unwrap_or(0);
-                    format!("[{:.6e}, {:.6e}]", u.lower[i], u.upper[i])
-                }
-                (true, None) => "-".into(),
-                (false, _) => "fixed".into(),
-            };
-            println!("  {name:<14} {:>22.12e}  {iv}", res.theta[k]);
-        }
-        for p in &preds {
-            println!(
-                "test {}:{}: RMS error of y[{INIT_WINDOW}:] {:.6e} (x1000 = {:.4}); initial state x0 = {:e}, v0 = {:e}",
-                p.range.start,
-                p.range.end,
-                p.rms,
-                1000.0 * p.rms,
-                p.initial.x,
-                p.initial.v
-            );
-        }
+        print!("{}", report::text(&run));
     }
     Ok(())
 }

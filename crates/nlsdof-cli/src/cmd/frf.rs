@@ -2,14 +2,11 @@
 //! stepped-sine sweep sees them (jumps, folds, phase quadrature), as text,
 //! JSON or CSV, optionally plotted to SVG.
 
-use super::roots::{
-    check_frequency, check_gamma, conventions_help, jumps_text, load_model, model_summary,
-    FormulationArg,
-};
+use super::roots::{check_frequency, check_gamma, conventions_help, load_model, FormulationArg};
 use crate::error::CliError;
-use crate::plot;
-use nlsdof::{level_responses, LevelResponse, NoMotion, SweepDirection};
-use serde_json::json;
+use nlsdof::{level_responses, SweepDirection};
+use nlsdof_report::frf_plot as plot;
+use nlsdof_report::steady_state as report;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -151,10 +148,6 @@ fn linspace(f_min: f64, f_max: f64, steps: usize) -> Vec<f64> {
         .collect()
 }
 
-fn hz(omega: f64) -> f64 {
-    omega / (2.0 * PI)
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
     // All checks first, all computation in memory; files are written last
     // and atomically, so an error never leaves a file behind.
@@ -206,12 +199,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
     let levels = level_responses(&model, &gammas, &omegas, args.sweep.to_core(), formulation)?;
 
+    let model_name = args.model.display().to_string();
+    let request = report::SweepRequest {
+        model_name: &model_name,
+        direction: args.sweep.to_core(),
+        formulation,
+        steps: args.steps,
+        f_min,
+        f_max,
+    };
     let mut stdout_text = if args.json {
-        json_output(&args, &model, &levels)
+        format!("{}\n", report::sweep_json(&request, &model, &levels))
     } else if args.csv {
-        csv_output(&levels)
+        report::sweep_csv(&levels)
     } else {
-        crate::error::compact_numbers(&text_output(&args, &model, &levels, f_min, f_max))
+        nlsdof_report::compact_numbers(&report::sweep_text(&request, &model, &levels))
     };
 
     if let Some(path) = &args.plot {
@@ -241,238 +243,4 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     print!("{stdout_text}");
     Ok(())
-}
-
-fn json_output(args: &Args, model: &nlsdof::Model, levels: &[LevelResponse]) -> String {
-    let lv: Vec<_> = levels
-        .iter()
-        .map(|l| {
-            let points: Vec<_> = l
-                .sweep
-                .points
-                .iter()
-                .map(|p| {
-                    // no finite steady state: no amplitude, no phase
-                    let num = |v: f64| (!p.unbounded).then_some(v);
-                    json!({
-                        "f_hz": hz(p.omega),
-                        "amplitude": num(p.amplitude),
-                        "phase_deg": num(p.phase.to_degrees()),
-                        "stable": p.stable,
-                        "sticking": p.sticking,
-                        "unbounded": p.unbounded,
-                        // first order: x = a cos(Ωt − φ), no other harmonic
-                        "harmonics": [
-                            {"order": 0, "amplitude": num(0.0), "phase_deg": num(0.0)},
-                            {"order": 1, "amplitude": num(p.amplitude), "phase_deg": num(p.phase.to_degrees())},
-                        ],
-                        "max_abs_x": num(p.amplitude),
-                    })
-                })
-                .collect();
-            let jumps: Vec<_> = l
-                .sweep
-                .jumps
-                .iter()
-                .map(|j| {
-                    json!({
-                        "f_hz": hz(j.omega),
-                        "amplitude_before": j.amplitude_before,
-                        "amplitude_after": j.amplitude_after,
-                    })
-                })
-                .collect();
-            let folds: Vec<f64> = l.sweep.folds.iter().map(|f| hz(f.omega)).collect();
-            let fold_amps: Vec<f64> = l.sweep.folds.iter().map(|f| f.amplitude).collect();
-            json!({
-                "gamma": l.gamma,
-                "sweep": args.sweep.name(),
-                "points": points,
-                "jumps": jumps,
-                "folds_hz": folds,
-                "fold_amplitudes": fold_amps,
-                "phase_quadrature": l.phase_quadrature.map(|q| json!({"f_hz": hz(q.omega), "amplitude": q.amplitude})),
-            })
-        })
-        .collect();
-    let out = json!({
-        "model": args.model.display().to_string(),
-        "f_n_hz": hz(model.omega_n()),
-        "zeta": model.zeta(),
-        "formulation": args.formulation.name(),
-        "harmonics": 1,
-        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak", "f_hz": "Hz", "phase_deg": "deg lag of x behind input"},
-        "levels": lv,
-    });
-    format!("{out}\n")
-}
-
-/// CSV rows; the first five columns are the contract, `sweep` matches the
-/// stepped-sine data format read by the fitting commands, `stable` and
-/// `sticking` flag each point. A sticking point (no steady motion) has
-/// amplitude 0 and an empty phase (there is no phase to report); a point
-/// without a finite steady state (undamped resonance) has both empty.
-fn csv_output(levels: &[LevelResponse]) -> String {
-    let mut s = String::from("level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking\n");
-    for (i, l) in levels.iter().enumerate() {
-        let sweep = match l.sweep.direction {
-            nlsdof::SweepDirection::Up => "up",
-            nlsdof::SweepDirection::Down => "down",
-        };
-        for p in &l.sweep.points {
-            let phase = if p.sticking || p.unbounded {
-                String::new()
-            } else {
-                format!("{}", p.phase.to_degrees())
-            };
-            let amplitude = if p.unbounded {
-                String::new()
-            } else {
-                format!("{}", p.amplitude)
-            };
-            let _ = writeln!(
-                s,
-                "{},{},{},{},{},{},{},{}",
-                i + 1,
-                l.gamma,
-                hz(p.omega),
-                amplitude,
-                phase,
-                sweep,
-                p.stable,
-                p.sticking
-            );
-        }
-    }
-    s
-}
-
-fn text_output(
-    args: &Args,
-    model: &nlsdof::Model,
-    levels: &[LevelResponse],
-    f_min: f64,
-    f_max: f64,
-) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "model {}: {}",
-        args.model.display(),
-        model_summary(model)
-    );
-    let _ = writeln!(
-        s,
-        "stepped-sine sweep {}, {} .. {} Hz, {} steps; formulation {} ({})",
-        args.sweep.name(),
-        f_min,
-        f_max,
-        args.steps,
-        args.formulation.name(),
-        args.formulation.description()
-    );
-    let _ = writeln!(
-        s,
-        "amplitudes zero-to-peak in m; phase = lag of x behind the input, deg"
-    );
-    for (i, l) in levels.iter().enumerate() {
-        let _ = writeln!(s);
-        let _ = writeln!(
-            s,
-            "level {}: gamma = {} m/s^2 zero-to-peak ({} m/s^2 peak-to-peak)",
-            i + 1,
-            l.gamma,
-            2.0 * l.gamma
-        );
-        let peak = l
-            .sweep
-            .points
-            .iter()
-            .filter(|p| !p.sticking && !p.unbounded)
-            .max_by(|a, b| a.amplitude.total_cmp(&b.amplitude));
-        match peak {
-            Some(p) => {
-                let _ = writeln!(
-                    s,
-                    "  peak (swept)       {:.6e} m at {:.6} Hz, phase lag {:.2} deg",
-                    p.amplitude,
-                    hz(p.omega),
-                    p.phase.to_degrees()
-                );
-            }
-            None => {
-                let _ = writeln!(s, "  peak (swept)       none: no motion at any step");
-            }
-        }
-        let sticking = l.sweep.points.iter().filter(|p| p.sticking).count();
-        if let Some(first) = l.sweep.points.iter().find(|p| p.sticking) {
-            let why = match l
-                .response
-                .steady_states(first.omega)
-                .ok()
-                .and_then(|r| r.no_motion)
-            {
-                Some(NoMotion::Sticking { .. }) => "Coulomb friction sticks",
-                _ => "no steady-state root",
-            };
-            let _ = writeln!(
-                s,
-                "  no motion          at {} of {} steps ({why})",
-                sticking,
-                l.sweep.points.len()
-            );
-        }
-        let unbounded = l.sweep.points.iter().filter(|p| p.unbounded).count();
-        if let Some(first) = l.sweep.points.iter().find(|p| p.unbounded) {
-            let _ = writeln!(
-                s,
-                "  no finite state    at {unbounded} of {} steps (first {:.6} Hz): the response grows without bound (no damping at resonance)",
-                l.sweep.points.len(),
-                hz(first.omega)
-            );
-        }
-        let unstable = l
-            .sweep
-            .points
-            .iter()
-            .filter(|p| !p.sticking && !p.unbounded && !p.stable)
-            .count();
-        if unstable > 0 {
-            let _ = writeln!(
-                s,
-                "  no stable state    at {unstable} steps (followed state unstable)"
-            );
-        }
-        jumps_text(&mut s, &l.sweep.jumps);
-        if l.sweep.folds.is_empty() {
-            let _ = writeln!(s, "  folds              none in the band");
-        }
-        for f in &l.sweep.folds {
-            let _ = writeln!(
-                s,
-                "  fold               at {:.6} Hz, amplitude {:.6e} m",
-                hz(f.omega),
-                f.amplitude
-            );
-        }
-        match l.phase_quadrature {
-            Some(q) => {
-                let _ = writeln!(
-                    s,
-                    "  phase quadrature   {:.6} Hz, amplitude {:.6e} m{}",
-                    hz(q.omega),
-                    q.amplitude,
-                    if hz(q.omega) < f_min || hz(q.omega) > f_max {
-                        " (outside the band)"
-                    } else {
-                        ""
-                    }
-                );
-            }
-            None => {
-                let _ = writeln!(s, "  phase quadrature   none");
-            }
-        }
-    }
-    s
 }

@@ -3,13 +3,12 @@
 //! the number of harmonics H, until converged
 //! ([`nlsdof::multi_harmonic::truncation`]).
 
-use super::roots::{check_frequency, check_gamma, load_model, model_summary};
+use super::roots::{check_frequency, check_gamma, load_model};
 use crate::error::CliError;
-use nlsdof::multi_harmonic::truncation::{truncation_study, TruncationStudy};
+use nlsdof::multi_harmonic::truncation::truncation_study;
 use nlsdof::multi_harmonic::ContinuationOptions;
-use serde_json::json;
+use nlsdof_report::truncation as report;
 use std::f64::consts::PI;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// Harmonic counts tried, in order (odd first: symmetric power laws excite
@@ -66,14 +65,6 @@ pub struct Args {
     pub json: bool,
 }
 
-fn hz(w: f64) -> f64 {
-    w / (2.0 * PI)
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
     let mut gammas = Vec::new();
     for item in args.gamma.split(',') {
@@ -99,7 +90,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let model = load_model(&args.model)?;
     super::frf_mhb::check_damped(&model, "hb-error")?;
-    let fn_hz = hz(model.omega_n());
+    let fn_hz = model.omega_n() / (2.0 * PI);
     let f_min = check_frequency("--f-min", args.f_min.unwrap_or(0.8 * fn_hz))?;
     let f_max = check_frequency("--f-max", args.f_max.unwrap_or(2.0 * fn_hz))?;
     if f_min >= f_max {
@@ -144,147 +135,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         studies.push((g, st));
     }
+    let model_name = args.model.display().to_string();
+    let request = report::StudyRequest {
+        model_name: &model_name,
+        f_min,
+        f_max,
+        tol: args.tol,
+    };
     if args.json {
-        print!("{}", json_output(&args, fn_hz, f_min, f_max, &studies));
+        println!("{}", report::study_json(&request, &model, &studies));
     } else {
-        print!("{}", text_output(&args, &model, f_min, f_max, &studies));
+        print!("{}", report::study_text(&request, &model, &studies));
     }
     Ok(())
-}
-
-fn errors(st: &TruncationStudy, i: usize) -> (Option<f64>, Option<f64>, Vec<Option<f64>>) {
-    let r = &st.rows[i];
-    let reference = &st.rows[st.reference];
-    let (pa, pf) = match (r.peak, reference.peak) {
-        (Some(p), Some(q)) => (Some(rel(p.1, q.1)), Some(rel(p.0, q.0))),
-        _ => (None, None),
-    };
-    let folds = if r.folds.len() == reference.folds.len() {
-        r.folds
-            .iter()
-            .zip(&reference.folds)
-            .map(|(a, b)| Some(rel(a.0, b.0)))
-            .collect()
-    } else {
-        r.folds.iter().map(|_| None).collect()
-    };
-    (pa, pf, folds)
-}
-
-fn json_output(
-    args: &Args,
-    fn_hz: f64,
-    f_min: f64,
-    f_max: f64,
-    studies: &[(f64, TruncationStudy)],
-) -> String {
-    let levels: Vec<_> = studies
-        .iter()
-        .map(|(g, st)| {
-            let rows: Vec<_> = st
-                .rows
-                .iter()
-                .enumerate()
-                .map(|(i, r)| {
-                    let (pa, pf, fe) = errors(st, i);
-                    json!({
-                        "harmonics": r.harmonics,
-                        "peak": r.peak.map(|p| json!({"f_hz": hz(p.0), "amplitude": p.1, "max_abs_x": p.2})),
-                        "folds_hz": r.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
-                        "fold_amplitudes": r.folds.iter().map(|f| f.1).collect::<Vec<_>>(),
-                        "peak_amplitude_error": pa,
-                        "peak_frequency_error": pf,
-                        "fold_frequency_errors": fe,
-                        "change": if r.change.is_finite() { Some(r.change) } else { None },
-                        "samples_per_period": r.samples,
-                        "points": r.points,
-                        "warning": r.warning.as_ref().map(|w| w.to_string()),
-                    })
-                })
-                .collect();
-            json!({
-                "gamma": g,
-                "converged": st.converged,
-                "reference_harmonics": st.rows[st.reference].harmonics,
-                "rows": rows,
-            })
-        })
-        .collect();
-    let out = json!({
-        "model": args.model.display().to_string(),
-        "f_n_hz": fn_hz,
-        "f_min_hz": f_min,
-        "f_max_hz": f_max,
-        "tol": args.tol,
-        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak (first harmonic)", "errors": "relative, against the reference H"},
-        "levels": levels,
-    });
-    format!("{out}\n")
-}
-
-fn text_output(
-    args: &Args,
-    model: &nlsdof::Model,
-    f_min: f64,
-    f_max: f64,
-    studies: &[(f64, TruncationStudy)],
-) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "model {}: {}",
-        args.model.display(),
-        model_summary(model)
-    );
-    let _ = writeln!(
-        s,
-        "band {f_min} .. {f_max} Hz; errors relative to the converged H (tol {:e}); amplitudes zero-to-peak, first harmonic",
-        args.tol
-    );
-    for (g, st) in studies {
-        let _ = writeln!(s);
-        let reference = &st.rows[st.reference];
-        let _ = writeln!(
-            s,
-            "gamma = {g} m/s^2: {} at H = {}",
-            if st.converged {
-                "converged"
-            } else {
-                "NOT converged, errors against"
-            },
-            reference.harmonics
-        );
-        let _ = writeln!(
-            s,
-            "   H   peak a1 [m]    peak f [Hz]   max|x| [m]     err a1     err f_peak  folds [Hz] (err)                     N"
-        );
-        for (i, r) in st.rows.iter().enumerate() {
-            let (pa, pf, fe) = errors(st, i);
-            let peak = match r.peak {
-                Some(p) => format!("{:.6e}  {:<12.7}  {:.6e}", p.1, hz(p.0), p.2),
-                None => format!("{:<40}", "no peak in the band"),
-            };
-            let e = |v: Option<f64>| v.map(|x| format!("{x:.2e}")).unwrap_or_else(|| "-".into());
-            let folds: Vec<String> = r
-                .folds
-                .iter()
-                .zip(&fe)
-                .map(|(f, err)| format!("{:.7} ({})", hz(f.0), e(*err)))
-                .collect();
-            let _ = writeln!(
-                s,
-                "{:4}   {peak}   {:>9}  {:>9}   {:<38} {}",
-                r.harmonics,
-                e(pa),
-                e(pf),
-                if folds.is_empty() {
-                    "none".into()
-                } else {
-                    folds.join(", ")
-                },
-                r.samples
-            );
-        }
-    }
-    s
 }

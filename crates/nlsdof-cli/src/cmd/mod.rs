@@ -9,7 +9,6 @@ pub mod frf;
 pub mod frf_estimate;
 pub mod frf_mhb;
 pub mod hb_error;
-pub mod landscape_plot;
 pub mod linear_id;
 pub mod phase_resonance;
 pub mod progress;

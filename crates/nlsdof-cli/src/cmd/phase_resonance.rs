@@ -7,16 +7,16 @@ use super::fit::{
     apply_bounds, apply_fix_free, integer_pairs_json, integer_pairs_text, parse_model_kind,
     resolve_mass, DataArgs,
 };
-use super::sign::{fit_pr_signed, sign_trials_json, sign_trials_text, SignArg};
+use super::sign::{fit_pr_signed, SignArg};
 use crate::error::CliError;
 use nlsdof::identification::models::GAIN;
-use nlsdof::identification::phase_resonance::{default_spec, PrDataset, PrFitOptions, PrFitResult};
+use nlsdof::identification::phase_resonance::{default_spec, PrDataset, PrFitOptions};
 use nlsdof::identification::search::best_integer_fit_phase_resonance;
-use nlsdof::identification::{FitSpec, ModelKind, Parameter, Sign, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof::identification::{FitSpec, ModelKind, Sign, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::phase_resonance_data::read_csv;
 use nlsdof_io::stepped_sine_data::{AmplitudeKind, ReadOptions};
+use nlsdof_report::fit::{pr_json, pr_table_text, pr_text, sign_trials_json, sign_trials_text};
 use serde_json::{json, Value};
-use std::f64::consts::PI;
 use std::fmt::Write as _;
 
 impl DataArgs {
@@ -45,188 +45,6 @@ impl DataArgs {
         };
         read_csv(path, &opts).map_err(|e| CliError::Usage(e.to_string()))
     }
-}
-
-fn hz(w: f64) -> f64 {
-    w / (2.0 * PI)
-}
-
-fn status_name(s: Status) -> &'static str {
-    match s {
-        Status::Absent => "absent",
-        Status::Fixed(_) => "fixed",
-        Status::Free => "free",
-    }
-}
-
-fn mass_scaled(j: usize) -> bool {
-    Parameter::ALL[j].mass_scaled()
-}
-
-/// JSON of one phase-resonance fit (same parameter block as sweep fits).
-pub fn pr_json(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> Value {
-    let m = mass.unwrap_or(1.0);
-    let mut params = Vec::new();
-    for j in 0..N_PARAMS {
-        if res.status[j] == Status::Absent {
-            continue;
-        }
-        let unc = res.uncertainty.as_ref().and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == PARAM_NAMES[j])
-                .map(|k| (u, k))
-        });
-        let phys = |v: f64| if mass_scaled(j) { v * m } else { v };
-        params.push(json!({
-            "name": PARAM_NAMES[j],
-            "status": status_name(res.status[j]),
-            "value": res.theta[j],
-            "std_error": unc.map(|(u, k)| u.std_errors[k]),
-            "ci95": unc.map(|(u, k)| [u.lower[k], u.upper[k]]),
-            "physical": { "name": Parameter::ALL[j].info().physical_name, "unit": Parameter::ALL[j].info().physical_unit, "value": phys(res.theta[j]),
-                          "ci95": unc.map(|(u, k)| [phys(u.lower[k]), phys(u.upper[k])]) },
-        }));
-    }
-    let pq: Vec<Value> = res
-        .rows
-        .iter()
-        .map(|r| {
-            let (df, da) = r.differences_percent();
-            json!({
-                "level": r.level, "gamma": r.gamma, "measured_from": "phase-resonance data",
-                "measured_f_hz": hz(r.measured_omega), "measured_amplitude": r.measured_amplitude,
-                "model_f_hz": hz(r.model_omega), "model_amplitude": r.model_amplitude,
-                "diff_f_percent": df, "diff_amplitude_percent": da,
-            })
-        })
-        .collect();
-    let minima: Vec<Value> = res
-        .minima
-        .iter()
-        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
-        .collect();
-    json!({
-        "data": "phase-resonance",
-        "model": res.kind.name(),
-        "stiffness_sign": res.stiffness_sign.name(),
-        "parameters": params,
-        "parameter_order": PARAM_NAMES,
-        "theta": res.theta.to_array(),
-        "mass": mass,
-        "mass_note": if mass.is_none() { Some("no mass given: physical values are per unit mass (m = 1 kg)") } else { None },
-        "cost": res.cost,
-        "rms": res.rms(),
-        "frequency_weight": frequency_weight,
-        "frequency_scale": res.frequency_scale,
-        "aic": res.aic(), "bic": res.bic(),
-        "points": res.n_points, "residuals": 2 * res.n_points, "free_parameters": res.n_free,
-        "termination": res.termination.name(),
-        "iterations": res.iterations,
-        "correlation": res.uncertainty.as_ref().map(|u| json!({"names": u.names, "matrix": u.correlation})),
-        "minima": minima,
-        "phase_quadrature": pq,
-    })
-}
-
-/// The measured-vs-model table of a phase-resonance fit.
-pub fn pr_table_text(res: &PrFitResult) -> String {
-    let mut s = String::new();
-    writeln!(
-        s,
-        "\nphase resonance ({}): {:<10} {:>10} {:>12} {:>12} {:>9} {:>12} {:>12} {:>9}",
-        res.kind,
-        "level",
-        "gamma",
-        "f_meas [Hz]",
-        "f_model",
-        "diff %",
-        "a_meas [m]",
-        "a_model",
-        "diff %"
-    )
-    .ok();
-    for r in &res.rows {
-        let (df, da) = r.differences_percent();
-        writeln!(
-            s,
-            "  {:<10} {:>10.5} {:>12.5} {:>12.5} {:>9.3} {:>12.5e} {:>12.5e} {:>9.3}",
-            r.level,
-            r.gamma,
-            hz(r.measured_omega),
-            hz(r.model_omega),
-            df,
-            r.measured_amplitude,
-            r.model_amplitude,
-            da
-        )
-        .ok();
-    }
-    s
-}
-
-/// Human-readable report of one phase-resonance fit.
-pub fn pr_text(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> String {
-    let mut s = String::new();
-    writeln!(
-        s,
-        "model {} from phase-resonance points: cost = {:.6e}, RMS = {:.6e} s^2, {} levels ({} residuals), {} free parameters",
-        res.kind,
-        res.cost,
-        res.rms(),
-        res.n_points,
-        2 * res.n_points,
-        res.n_free
-    )
-    .ok();
-    writeln!(
-        s,
-        "frequency weight w_f = {frequency_weight} (W = {:.6e} s^2); stiffness sign: {}",
-        res.frequency_scale,
-        res.stiffness_sign.name()
-    )
-    .ok();
-    writeln!(
-        s,
-        "termination: {} after {} iterations",
-        res.termination, res.iterations
-    )
-    .ok();
-    super::fit::parameter_table_text(
-        &mut s,
-        &res.theta,
-        &res.status,
-        res.uncertainty.as_ref(),
-        mass,
-    );
-    if res.uncertainty.is_none() {
-        writeln!(
-            s,
-            "intervals: not available (no residual degrees of freedom: 2 x levels = free parameters)"
-        )
-        .ok();
-    }
-    s.push_str(&pr_table_text(res));
-    if res.minima.len() > 1 || res.minima.first().map_or(false, |m| m.count > 1) {
-        writeln!(s, "\ndistinct local minima ({}):", res.minima.len()).ok();
-        for (i, mm) in res.minima.iter().enumerate().take(20) {
-            let free: Vec<String> = (0..N_PARAMS)
-                .filter(|&j| res.status[j] == Status::Free)
-                .map(|j| format!("{}={:.5e}", PARAM_NAMES[j], mm.theta[j]))
-                .collect();
-            writeln!(
-                s,
-                "  #{:<3} cost {:.6e}  starts {:>4}  {}  {}",
-                i + 1,
-                mm.cost,
-                mm.count,
-                mm.termination,
-                free.join(" ")
-            )
-            .ok();
-        }
-    }
-    s
 }
 
 /// Checks `--frequency-weight`.

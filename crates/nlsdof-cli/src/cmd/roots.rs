@@ -5,8 +5,8 @@
 //! conventions paragraph of the long help.
 
 use crate::error::CliError;
-use nlsdof::{ForcedResponse, Formulation, Model, NoMotion};
-use serde_json::json;
+use nlsdof::{ForcedResponse, Formulation, Model};
+use nlsdof_report::steady_state as report;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -26,17 +26,8 @@ impl FormulationArg {
             FormulationArg::Modulation => Formulation::Modulation,
         }
     }
-    pub fn name(self) -> &'static str {
-        match self {
-            FormulationArg::Hb => "hb",
-            FormulationArg::Modulation => "modulation",
-        }
-    }
     pub fn description(self) -> &'static str {
-        match self {
-            FormulationArg::Hb => "exact first-order harmonic balance",
-            FormulationArg::Modulation => "near-resonance form, paper Eq 30",
-        }
+        report::formulation_description(self.to_core())
     }
 }
 
@@ -134,15 +125,6 @@ pub fn check_frequency(flag: &str, f: f64) -> Result<f64, CliError> {
     }
 }
 
-/// Linear natural frequency (Hz) and damping ratio, for report headers.
-pub fn model_summary(model: &Model) -> String {
-    format!(
-        "f_n = {:.6} Hz, zeta = {:.6} (linear part)",
-        model.omega_n() / (2.0 * PI),
-        model.zeta()
-    )
-}
-
 #[derive(clap::Args)]
 #[command(
     about = "All steady-state amplitudes at one input level and frequency, with phase and stability",
@@ -189,12 +171,6 @@ EXAMPLE:
     )
 }
 
-/// Six significant digits, without trailing zeros.
-fn round6(v: f64) -> String {
-    let s = format!("{v:.5e}");
-    s.parse::<f64>().map(crate::error::num).unwrap_or(s)
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
     let gamma = check_gamma(args.gamma)?;
     let f_hz = check_frequency("--f-hz", args.f_hz)?;
@@ -202,106 +178,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let response = ForcedResponse::new(&model, gamma, args.formulation.to_core())?;
     let set = response.steady_states(2.0 * PI * f_hz)?;
 
+    let name = args.model.display().to_string();
+    let formulation = args.formulation.to_core();
     if args.json {
-        let roots: Vec<_> = set
-            .roots
-            .iter()
-            .map(|r| json!({"amplitude": r.amplitude, "phase_deg": r.phase.to_degrees(), "stable": r.stable}))
-            .collect();
-        let mut out = json!({
-            "model": args.model.display().to_string(),
-            "f_hz": f_hz,
-            "gamma": gamma,
-            "formulation": args.formulation.name(),
-            "roots": roots,
-            "no_motion": serde_json::Value::Null,
-        });
-        match set.no_motion {
-            None => {}
-            Some(NoMotion::Sticking {
-                friction_accel,
-                input_accel,
-            }) => {
-                out["no_motion"] = json!("sticking");
-                out["friction_accel"] = json!(friction_accel);
-                out["input_accel"] = json!(input_accel);
-                out["friction_force_n"] = json!(friction_accel * model.mass);
-                out["input_force_n"] = json!(input_accel * model.mass);
-            }
-            Some(NoMotion::NoRoot) => out["no_motion"] = json!("no_root"),
-            Some(NoMotion::Unbounded) => out["no_motion"] = json!("unbounded"),
-        }
-        println!("{out}");
-        return Ok(());
-    }
-
-    println!("model {}: {}", args.model.display(), model_summary(&model));
-    println!(
-        "gamma = {} m/s^2 zero-to-peak, f = {} Hz, formulation: {} ({})",
-        crate::error::num(gamma),
-        crate::error::num(f_hz),
-        args.formulation.name(),
-        args.formulation.description()
-    );
-    match set.no_motion {
-        Some(NoMotion::Sticking {
-            friction_accel,
-            input_accel,
-        }) => {
-            println!("no steady motion: the mass sticks");
-            println!(
-                "Coulomb friction sticks: 4 c_f/pi = {} N >= m gamma = {} N",
-                round6(friction_accel * model.mass),
-                round6(input_accel * model.mass)
-            );
-        }
-        Some(NoMotion::NoRoot) => {
-            println!("no steady motion: the harmonic-balance equation has no positive root");
-        }
-        Some(NoMotion::Unbounded) => {
-            println!("no finite steady state: nothing balances the input at any amplitude, so the response grows without bound (no damping at resonance)");
-        }
-        None => {
-            let n = set.roots.len();
-            println!("{n} steady state{}:", if n == 1 { "" } else { "s" });
-            println!(
-                "  {:>2}  {:>14}  {:>15}  stability",
-                "#", "amplitude [m]", "phase lag [deg]"
-            );
-            for (i, r) in set.roots.iter().enumerate() {
-                println!(
-                    "  {:>2}  {:>14.6e}  {:>15.4}  {}",
-                    i + 1,
-                    r.amplitude,
-                    r.phase.to_degrees(),
-                    if r.stable { "stable" } else { "unstable" }
-                );
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The summary lines of a sweep's jumps (shared by the first-order and
-/// multi-harmonic `frf` text output).
-pub fn jumps_text(s: &mut String, jumps: &[nlsdof::Jump]) {
-    use std::fmt::Write as _;
-    let hz = |omega: f64| omega / (2.0 * PI);
-    if jumps.is_empty() {
-        let _ = writeln!(s, "  jumps              none");
-    }
-    for j in jumps {
-        let _ = writeln!(
-            s,
-            "  jump               at {:.6} Hz: {:.6e} m -> {:.6e} m ({})",
-            hz(j.omega),
-            j.amplitude_before,
-            j.amplitude_after,
-            if j.amplitude_after > j.amplitude_before {
-                "up"
-            } else {
-                "down"
-            }
+        println!(
+            "{}",
+            report::roots_json(&name, &model, f_hz, gamma, formulation, &set)
+        );
+    } else {
+        print!(
+            "{}",
+            report::roots_text(&name, &model, f_hz, gamma, formulation, &set)
         );
     }
+    Ok(())
 }

@@ -9,7 +9,6 @@ use nlsdof::identification::phase_resonance::{
 };
 use nlsdof::identification::search::{fit_each_sign, signs_to_try, SignTrial};
 use nlsdof::identification::{fit, Dataset, FitOptions, FitResult, FitSpec, ModelKind, Sign};
-use serde_json::{json, Value};
 
 /// Options of `fit` and `compare` added for phase-resonance data and the
 /// stiffness sign.
@@ -81,38 +80,6 @@ impl SignArg {
         };
         signs_to_try(kind, self == SignArg::Auto, preferred)
     }
-}
-
-/// JSON of the `--sign auto` trials (`None` if only one sign was fitted).
-pub fn sign_trials_json(t: &[SignTrial]) -> Option<Value> {
-    (t.len() > 1).then(|| {
-        Value::Array(
-            t.iter()
-                .map(|t| match &t.cost {
-                    Ok(c) => json!({"sign": t.sign.name(), "cost": c}),
-                    Err(e) => json!({"sign": t.sign.name(), "error": e}),
-                })
-                .collect(),
-        )
-    })
-}
-
-/// Text of the `--sign auto` trials (empty if only one sign was fitted).
-pub fn sign_trials_text(t: &[SignTrial], chosen: Sign) -> String {
-    if t.len() < 2 {
-        return String::new();
-    }
-    let mut s = format!("--sign auto: kept {}; ", chosen.name());
-    let parts: Vec<String> = t
-        .iter()
-        .map(|t| match &t.cost {
-            Ok(c) => format!("{} cost {c:.6e}", t.sign.name()),
-            Err(e) => format!("{} failed ({e})", t.sign.name()),
-        })
-        .collect();
-    s.push_str(&parts.join(", "));
-    s.push('\n');
-    s
 }
 
 /// Sweep fit (Eq 31) with the stiffness sign chosen by `sign`

@@ -8,7 +8,7 @@ use nlsdof::simulation::{
 };
 use nlsdof::Model;
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid};
-use serde_json::json;
+use nlsdof_report::simulation as report;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -384,67 +384,37 @@ pub fn run(a: Args) -> Result<(), CliError> {
         (_, false, 2) => "samples",
         _ => "linear",
     };
-    // reported per input sample: 0.5 = two RK4 steps per sample
-    let samples_per_step = if cubic {
-        json!(2.0 / CUBIC_FACTOR as f64)
-    } else {
-        json!(summary.samples_per_step)
-    };
-    let method_name = match method {
-        Method::Rk4 { .. } => "rk4",
-        Method::DormandPrince { .. } => "dopri",
+    let input_name = a.input.display().to_string();
+    let out_name = a.out.display().to_string();
+    let run = report::SimulationRun {
+        input: &input_name,
+        out: &out_name,
+        summary: &summary,
+        outputs,
+        fs: match &signal.grid {
+            SignalGrid::Uniform { fs, .. } => Some(*fs),
+            SignalGrid::Times(_) => None,
+        },
+        method: match method {
+            Method::Rk4 { .. } => "rk4",
+            Method::DormandPrince { .. } => "dopri",
+        },
+        // reported per input sample: 0.5 = two RK4 steps per sample
+        samples_per_step: if cubic {
+            2.0 / CUBIC_FACTOR as f64
+        } else {
+            summary.samples_per_step as f64
+        },
+        interpolation,
+        integration_error: error_estimate.map(|e| (e, check_n, e > ERROR_WARN)),
+        max_abs_x: max_x,
+        elapsed_s: elapsed,
     };
     if a.json {
-        let v = json!({
-            "input": a.input,
-            "out": a.out,
-            "samples": summary.samples,
-            "outputs": outputs,
-            "sampling": match &signal.grid {
-                SignalGrid::Uniform { fs, .. } => json!({"uniform": true, "fs_hz": fs}),
-                SignalGrid::Times(_) => json!({"uniform": false}),
-            },
-            "method": method_name,
-            "samples_per_step": samples_per_step,
-            "input_interpolation": interpolation,
-            "integration_error": error_estimate.map(|e| json!({
-                "estimate": e,
-                "relative_to": "max |x|",
-                "reference": "RK4, h = 1/(4 fs), cubic input (estimates the step error; the input between samples is taken as cubic)",
-                "samples_checked": check_n,
-                "warning": e > ERROR_WARN,
-            })),
-            "steps": summary.steps,
-            "rejected_steps": summary.rejected_steps,
-            "rhs_evaluations": summary.rhs_evaluations,
-            "friction_events": summary.events,
-            "final": {"t": summary.final_time, "x": summary.final_state.x, "v": summary.final_state.v},
-            "max_abs_x": max_x,
-            "simulate_and_write_s": elapsed,
-            "total_s": t_start.elapsed().as_secs_f64(),
-        });
-        println!("{v}");
+        let total_s = t_start.elapsed().as_secs_f64();
+        println!("{}", report::json(&run, total_s));
     } else {
-        let sps = if summary.samples_per_step > 0 {
-            format!(", {samples_per_step} sample(s)/step, {interpolation} input")
-        } else {
-            String::new()
-        };
-        let err = match error_estimate {
-            Some(e) => format!("; estimated integration error {e:.1e} of max |x|"),
-            None => String::new(),
-        };
-        println!(
-            "simulated {} samples ({method_name}{sps}, {} steps, {} RHS evaluations{}) in {:.3} s; max |x| = {:.6e} m{err}; wrote {} rows to {}",
-            summary.samples,
-            summary.steps,
-            summary.rhs_evaluations,
-            if summary.events > 0 { format!(", {} stick/slip events", summary.events) } else { String::new() },
-            elapsed,
-            max_x,
-            outputs,
-            a.out.display()
-        );
+        print!("{}", report::text(&run));
     }
     Ok(())
 }

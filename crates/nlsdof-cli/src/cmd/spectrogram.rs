@@ -10,6 +10,7 @@ use nlsdof::signal_processing::spectrogram_comparison::{
 use nlsdof::signal_processing::stft::{Detrend, Scaling, Spectrogram, StftOptions};
 use nlsdof::signal_processing::{Symmetry, Window};
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid, UNIFORM_TOLERANCE};
+use nlsdof_report::spectrogram as report;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -211,25 +212,6 @@ fn stft_err(e: nlsdof::signal_processing::stft::StftError) -> CliError {
     CliError::Usage(e.to_string())
 }
 
-/// A percentage for people: 3 decimals, scientific from 10^4 on, "inf".
-fn fmt_percent(v: f64) -> String {
-    if !v.is_finite() {
-        "inf".into()
-    } else if v.abs() >= 1e4 {
-        format!("{v:.3e}")
-    } else {
-        format!("{v:.3}")
-    }
-}
-
-fn json_num(v: f64) -> serde_json::Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        json!(null)
-    }
-}
-
 fn label_of(path: &Path, column: &str) -> String {
     let stem = path
         .file_name()
@@ -403,25 +385,24 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if let (Some(l), Some(s)) = (&label_n, &sn) {
         panels.push((l.as_str(), s));
     }
-    let title = match &diff {
-        Some(d) => format!(
-            "STFT, L = {}, {} % overlap, {} {} window; Eq 33 max = {} %, robust (>= {} of max) = {} %",
-            layout.segment_len,
-            (100.0 * layout.noverlap as f64 / layout.segment_len as f64).round(),
-            if a.periodic { "periodic" } else { "symmetric" },
-            opts.window.name(),
-            fmt_percent(d.max_relative_percent),
-            a.floor,
-            fmt_percent(d.robust_max_relative_percent)
-        ),
-        None => format!(
-            "STFT, L = {}, {} % overlap, {} {} window",
-            layout.segment_len,
-            (100.0 * layout.noverlap as f64 / layout.segment_len as f64).round(),
-            if a.periodic { "periodic" } else { "symmetric" },
-            opts.window.name()
-        ),
+    let input = a.input.display().to_string();
+    let compare = a.compare.as_ref().map(|p| p.display().to_string());
+    let compare_column = a.compare_column.as_deref().unwrap_or(&measured.column);
+    let run = report::SpectrogramRun {
+        label: &label_m,
+        input: &input,
+        column: &measured.column,
+        compare: compare.as_deref().map(|f| (f, compare_column)),
+        fs: measured.fs,
+        t0: measured.t0,
+        samples: n,
+        options: &cmp_opts.stft,
+        layout: &layout,
+        measured: &sm,
+        difference: diff.as_ref(),
+        floor: a.floor,
     };
+    let title = report::title(&run);
     let t_plot = Instant::now();
     let heat = match &a.plot {
         Some(_) => Some(with_spinner("drawing heat map", || {
@@ -463,106 +444,12 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
 
     // --- report
-    let (pk_i, pk) =
-        sm.magnitude.iter().enumerate().fold(
-            (0, 0.0f64),
-            |(bi, bv), (i, &v)| if v > bv { (i, v) } else { (bi, bv) },
-        );
-    let (pk_t, pk_f) = (sm.times[pk_i / sm.n_freq], sm.frequencies[pk_i % sm.n_freq]);
-    let unit = match opts.scaling {
-        Scaling::Amplitude => "(signal unit, 0-peak)",
-        Scaling::Psd => "unit^2/Hz",
-    };
     if a.json {
-        let v = json!({
-            "input": a.input,
-            "column": measured.column,
-            "samples": n,
-            "fs_hz": measured.fs,
-            "t0_s": measured.t0,
-            "stft": {
-                "window": opts.window.name(),
-                "symmetry": if a.periodic { "periodic" } else { "symmetric" },
-                "segment_len": layout.segment_len,
-                "noverlap": layout.noverlap,
-                "hop": layout.hop,
-                "segments": layout.n_segments,
-                "nfft": layout.nfft,
-                "bins": layout.n_freq,
-                "used_samples": layout.used_samples,
-                "frequency_resolution_hz": measured.fs / layout.nfft as f64,
-                "time_step_s": layout.hop as f64 / measured.fs,
-                "detrend": match opts.detrend { Detrend::None => "none", Detrend::Constant => "constant" },
-                "scaling": opts.scaling.name(),
-            },
-            "band_hz": [sm.frequencies[0], sm.frequencies[sm.n_freq - 1]],
-            "band_bins": sm.n_freq,
-            "peak": {"value": pk, "time_s": pk_t, "frequency_hz": pk_f},
-            "compare": diff.as_ref().map(|d| json!({
-                "file": a.compare,
-                "column": a.compare_column.as_deref().unwrap_or(&measured.column),
-                "eq33_max_relative_percent": json_num(d.max_relative_percent),
-                "eq33_infinite": d.max_relative_percent.is_infinite(),
-                "eq33_at_time_s": d.at_time,
-                "eq33_at_frequency_hz": d.at_frequency,
-                "robust_max_relative_percent": json_num(d.robust_max_relative_percent),
-                "floor_fraction": d.floor_fraction,
-                "robust_at_time_s": d.robust_at_time,
-                "robust_at_frequency_hz": d.robust_at_frequency,
-                "bins_compared": d.bins_compared,
-                "bins_total": d.bins_total,
-                "global_relative_percent": json_num(d.global_relative_percent),
-            })),
-            "outputs": {"plot": a.plot, "waterfall": a.waterfall, "csv": a.csv},
-            "stft_s": stft_s,
-            "plot_s": plot_s,
-            "total_s": t_start.elapsed().as_secs_f64(),
-        });
-        println!("{v}");
+        let outputs = json!({"plot": a.plot, "waterfall": a.waterfall, "csv": a.csv});
+        let timings = (stft_s, plot_s, t_start.elapsed().as_secs_f64());
+        println!("{}", report::json(&run, outputs, timings));
     } else {
-        println!(
-            "{}: {} samples at {} Hz; STFT {} {} window, L = {}, overlap {} ({} segments, hop {:.4} s), {} bins every {:.6} Hz; {:.3} s",
-            label_m,
-            n,
-            measured.fs,
-            if a.periodic { "periodic" } else { "symmetric" },
-            opts.window.name(),
-            layout.segment_len,
-            layout.noverlap,
-            layout.n_segments,
-            layout.hop as f64 / measured.fs,
-            layout.n_freq,
-            measured.fs / layout.nfft as f64,
-            stft_s
-        );
-        println!(
-            "peak {} = {:.6e} {unit} at t = {:.3} s, f = {:.4} Hz (band {:.4}..{:.4} Hz)",
-            opts.scaling.name(),
-            pk,
-            pk_t,
-            pk_f,
-            sm.frequencies[0],
-            sm.frequencies[sm.n_freq - 1]
-        );
-        if let Some(d) = &diff {
-            println!(
-                "Eq 33 max |s_exp - s_num|/s_exp = {} % at t = {:.3} s, f = {:.4} Hz (all {} bins)",
-                fmt_percent(d.max_relative_percent),
-                d.at_time,
-                d.at_frequency,
-                d.bins_total
-            );
-            println!(
-                "robust (s_exp >= {} x max): {} % at t = {:.3} s, f = {:.4} Hz ({} of {} bins); global ||s_exp - s_num||/||s_exp|| = {:.4} %",
-                d.floor_fraction,
-                fmt_percent(d.robust_max_relative_percent),
-                d.robust_at_time,
-                d.robust_at_frequency,
-                d.bins_compared,
-                d.bins_total,
-                d.global_relative_percent
-            );
-        }
+        print!("{}", report::text(&run, stft_s));
         for (what, p) in [
             ("heat map", &a.plot),
             ("waterfall", &a.waterfall),

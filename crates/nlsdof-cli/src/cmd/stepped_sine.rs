@@ -4,10 +4,11 @@
 
 use super::simulate::{load_model, Progress};
 use crate::error::CliError;
-use nlsdof::stepped_sine::{run_sweeps, RigOptions, RigSweep, INTEGRATION_WARNING};
+use nlsdof::stepped_sine::{run_sweeps, RigOptions, RigSweep};
 use nlsdof::SweepDirection;
 use nlsdof_io::signal_file::CsvWriter;
-use serde_json::json;
+use nlsdof_report::rig as report;
+use nlsdof_report::steady_state::sweep_name as name;
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -203,13 +204,6 @@ pub fn run(a: Args) -> Result<(), CliError> {
             .collect();
     let sim_s = t_sim.elapsed().as_secs_f64();
     progress.finish();
-    let name = |d: SweepDirection| {
-        if d == SweepDirection::Up {
-            "up"
-        } else {
-            "down"
-        }
-    };
     let mut unsettled = 0usize;
     for (k, sw) in &sweeps {
         let level = (k + 1).to_string();
@@ -259,72 +253,24 @@ pub fn run(a: Args) -> Result<(), CliError> {
             a.max_cycles
         );
     }
-    // the largest estimated integration error (RK4 with N and 2N steps
-    // per cycle, stepped_sine module docs) and where it occurred
-    let worst = sweeps
-        .iter()
-        .flat_map(|(_, s)| s.points.iter())
-        .max_by(|p, q| p.integration_error.total_cmp(&q.integration_error));
-    let integration_error = worst.map_or(0.0, |p| p.integration_error);
-    let integration_warning = (integration_error > INTEGRATION_WARNING).then(|| {
-        format!(
-            "the estimated integration error reaches {:.2e} of the amplitude (at {:.4} Hz): raise --samples-per-cycle (now {}; the error falls as its 4th power)",
-            integration_error,
-            worst.map_or(0.0, |p| p.omega / TAU),
-            a.samples_per_cycle
-        )
-    });
+    let (integration_error, integration_warning) =
+        report::integration_error(&sweeps, a.samples_per_cycle);
     if let Some(w) = &integration_warning {
         eprintln!("nlsdof: warning: {w}");
     }
-    let cycles: usize = sweeps
-        .iter()
-        .flat_map(|(_, s)| s.points.iter().map(|p| p.cycles))
-        .sum();
-    let simulated: f64 = sweeps.iter().map(|(_, s)| s.duration).sum();
+    let out_name = a.out.display().to_string();
+    let run = report::RigRun {
+        sweeps: &sweeps,
+        steps: n,
+        wall_s: sim_s,
+        out: &out_name,
+    };
     if a.json {
-        let levels: Vec<_> = sweeps
-            .iter()
-            .map(|(k, s)| {
-                let peak = s.points.iter().max_by(|p, q| p.amplitude.total_cmp(&q.amplitude));
-                json!({
-                    "level": k + 1,
-                    "gamma": s.gamma,
-                    "sweep": name(s.direction),
-                    "peak": peak.map(|p| json!({"f_hz": p.omega / TAU, "amplitude": p.amplitude, "phase_deg": p.phase.to_degrees()})),
-                    "unsettled": s.points.iter().filter(|p| !p.settled).count(),
-                    "simulated_s": s.duration,
-                })
-            })
-            .collect();
-        println!(
-            "{}",
-            json!({"out": a.out, "levels": levels, "steps": n, "cycles": cycles, "simulated_s": simulated, "wall_s": sim_s, "total_s": t_start.elapsed().as_secs_f64(),
-                   "integration_error": {"estimate": integration_error, "warning": integration_warning}})
-        );
+        let total_s = t_start.elapsed().as_secs_f64();
+        let integration = (integration_error, integration_warning);
+        println!("{}", report::json(&run, integration, total_s));
     } else {
-        for (k, s) in &sweeps {
-            if let Some(p) = s
-                .points
-                .iter()
-                .max_by(|p, q| p.amplitude.total_cmp(&q.amplitude))
-            {
-                println!(
-                    "level {} (gamma {} m/s^2, sweep {}): peak {:.6e} m at {:.4} Hz, phase {:.2} deg",
-                    k + 1,
-                    s.gamma,
-                    name(s.direction),
-                    p.amplitude,
-                    p.omega / TAU,
-                    p.phase.to_degrees()
-                );
-            }
-        }
-        println!(
-            "{} sweep(s) x {n} steps: {cycles} cycles = {simulated:.1} s of simulated time in {sim_s:.3} s; wrote {}",
-            sweeps.len(),
-            a.out.display()
-        );
+        print!("{}", report::text(&run));
     }
     Ok(())
 }

@@ -20,14 +20,13 @@
 //! Nothing is written under the target name until everything succeeded:
 //! the folder is built as a hidden sibling and renamed at the end.
 
-mod markdown;
 mod progress;
-mod report;
-mod table;
 
 use crate::error::CliError;
 use nlsdof::demo::{Demo, DemoSettings};
-use std::path::{Path, PathBuf};
+use nlsdof_io::atomic::{check_out_dir, StagedDir};
+use nlsdof_report::demo as report;
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(clap::Args)]
@@ -118,11 +117,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.noise,
         args.integer_radius,
     );
-    let staging = Staging::create(&args.out)?;
+    let staging = StagedDir::create(&args.out)?;
     let mut demo = Demo::new(settings);
     demo.run_all(&progress::Bars::default())?;
     let t_report = Instant::now();
-    let summary = report::write_all(&demo, staging.path(), &args.out)?;
+    let pb = progress::stage_bar(report::WRITE_STEPS, "6/6 report");
+    pb.set_message("figures (SVG, PNG) and tables");
+    let summary = report::write_all(&demo, staging.path(), &|| pb.inc(1))?;
+    pb.finish_and_clear();
     demo.timings.push((
         "figures and report".into(),
         t_report.elapsed().as_secs_f64(),
@@ -146,105 +148,4 @@ pub fn run(args: Args) -> Result<(), CliError> {
         print!("{}", report::text_summary(&demo, &args.out));
     }
     Ok(())
-}
-
-fn check_out_dir(out: &Path, force: bool) -> Result<(), CliError> {
-    match std::fs::metadata(out) {
-        Err(_) => Ok(()),
-        Ok(m) if !m.is_dir() => Err(CliError::Usage(format!(
-            "--out {}: exists and is not a directory",
-            out.display()
-        ))),
-        Ok(_) => {
-            let non_empty = std::fs::read_dir(out)
-                .map_err(|e| CliError::Usage(format!("--out {}: {e}", out.display())))?
-                .next()
-                .is_some();
-            if non_empty && !force {
-                Err(CliError::Usage(format!(
-                    "--out {}: directory exists and is not empty (use --force to replace it)",
-                    out.display()
-                )))
-            } else {
-                Ok(())
-            }
-        }
-    }
-}
-
-/// The report folder under construction: a hidden sibling of the target,
-/// removed on drop unless committed.
-struct Staging {
-    dir: Option<PathBuf>,
-}
-
-impl Staging {
-    fn create(out: &Path) -> Result<Self, CliError> {
-        let parent = out
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        let name = out
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .ok_or_else(|| {
-                CliError::Usage(format!("--out {}: not a folder name", out.display()))
-            })?;
-        if !parent.is_dir() {
-            return Err(CliError::Usage(format!(
-                "--out {}: parent folder {} does not exist",
-                out.display(),
-                parent.display()
-            )));
-        }
-        let dir = parent.join(format!(".{name}.{}.partial", std::process::id()));
-        if dir.exists() {
-            std::fs::remove_dir_all(&dir).ok();
-        }
-        nlsdof_io::atomic::register_partial_dir(&dir);
-        std::fs::create_dir_all(dir.join("tables"))
-            .map_err(|e| CliError::Usage(format!("cannot create {}: {e}", dir.display())))?;
-        Ok(Self { dir: Some(dir) })
-    }
-
-    fn path(&self) -> &Path {
-        self.dir.as_deref().expect("present until commit")
-    }
-
-    /// Renames the finished folder to `out` (replacing an existing one).
-    fn commit(mut self, out: &Path, force: bool) -> Result<(), CliError> {
-        let dir = self.dir.take().expect("present until commit");
-        let fail = |e: std::io::Error, dir: &Path| {
-            std::fs::remove_dir_all(dir).ok();
-            CliError::Usage(format!("cannot create {}: {e}", out.display()))
-        };
-        if out.exists() {
-            // checked at start: empty, or --force
-            check_out_dir(out, force).inspect_err(|_| {
-                std::fs::remove_dir_all(&dir).ok();
-            })?;
-            let old = dir.with_extension("old");
-            std::fs::rename(out, &old).map_err(|e| fail(e, &dir))?;
-            if let Err(e) = std::fs::rename(&dir, out) {
-                std::fs::rename(&old, out).ok();
-                return Err(fail(e, &dir));
-            }
-            std::fs::remove_dir_all(&old).ok();
-        } else {
-            std::fs::rename(&dir, out).map_err(|e| fail(e, &dir))?;
-        }
-        // Renamed (or removed on failure above, where a Ctrl-C cleanup of
-        // the vanished path is harmless).
-        nlsdof_io::atomic::unregister_partial_dir(&dir);
-        Ok(())
-    }
-}
-
-impl Drop for Staging {
-    fn drop(&mut self) {
-        if let Some(d) = self.dir.take() {
-            std::fs::remove_dir_all(&d).ok();
-            nlsdof_io::atomic::unregister_partial_dir(&d);
-        }
-    }
 }

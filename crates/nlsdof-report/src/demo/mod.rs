@@ -1,7 +1,9 @@
 //! Stage 6: figures, tables (markdown + CSV), `summary.json` and `report.md`.
 
-use super::table::{sig, Table};
-use crate::error::CliError;
+mod markdown;
+mod table;
+
+use crate::ReportError;
 use nlsdof::demo::spectra::PLOT_BAND;
 use nlsdof::demo::{
     noise_model, Demo, FitEntry, Linear, CHIRP_F0, CHIRP_F1, FS_RECORD, F_MAX, F_MIN, LEVELS_PP,
@@ -15,6 +17,7 @@ use serde_json::{json, Value};
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
 use std::path::Path;
+pub use table::{sig, Table};
 
 fn hz(w: f64) -> f64 {
     w / TAU
@@ -35,7 +38,7 @@ fn fig_path(dir: &Path, name: &str) -> std::path::PathBuf {
     dir.join(name)
 }
 
-fn write_svg(dir: &Path, name: &str, svg: String) -> Result<(), CliError> {
+fn write_svg(dir: &Path, name: &str, svg: String) -> Result<(), ReportError> {
     write_atomic(&fig_path(dir, name), svg.as_bytes())?;
     Ok(())
 }
@@ -52,7 +55,7 @@ fn level_label(i: usize) -> String {
 }
 
 /// Fig 2: the "measured" stepped-sine curves.
-fn fig2(demo: &Demo, dir: &Path) -> Result<(), CliError> {
+fn fig2(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let m = run.measured.as_ref().expect("ran");
@@ -129,7 +132,7 @@ fn max_y(p: &Panel) -> f64 {
 }
 
 /// Fig 4: the chirp's H1 and its vector fit.
-fn fig4(demo: &Demo, dir: &Path) -> Result<(), CliError> {
+fn fig4(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let l = run.linear.as_ref().expect("ran");
@@ -254,7 +257,7 @@ fn fit_figure(
     ids: &[&str],
     name: &str,
     title: &str,
-) -> Result<(), CliError> {
+) -> Result<(), ReportError> {
     // common y range over the figure so the panels compare at a glance
     let mut panels = Vec::new();
     for id in ids {
@@ -286,7 +289,7 @@ fn short(f: &FitEntry) -> &'static str {
 }
 
 /// RMS residual per level of every model, with the noise level.
-fn fig_rms(demo: &Demo, dir: &Path) -> Result<(), CliError> {
+fn fig_rms(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let m = run.measured.as_ref().expect("ran");
@@ -346,7 +349,7 @@ fn fig_rms(demo: &Demo, dir: &Path) -> Result<(), CliError> {
 }
 
 /// Per-step peak |x| of the full-length time simulation.
-fn fig_time(demo: &Demo, dir: &Path) -> Result<(), CliError> {
+fn fig_time(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let mut p = Panel::new(
@@ -385,7 +388,7 @@ fn fig_time(demo: &Demo, dir: &Path) -> Result<(), CliError> {
 }
 
 /// PNG spectrograms (heat map and waterfall), measured beside model.
-fn fig8_png(demo: &Demo, dir: &Path) -> Result<Vec<String>, CliError> {
+fn fig8_png(demo: &Demo, dir: &Path) -> Result<Vec<String>, ReportError> {
     let mut names = Vec::new();
     for run in &demo.runs {
         for ls in &run.spectra {
@@ -418,7 +421,7 @@ fn png_heatmap(
     pair: &[(&str, &nlsdof::signal_processing::stft::Spectrogram)],
     band: Option<(f64, f64)>,
     title: &str,
-) -> Result<bool, CliError> {
+) -> Result<bool, ReportError> {
     nlsdof_io::atomic::write_atomic(path, &nlsdof_figure::heatmap_png(pair, band, title)?)?;
     Ok(true)
 }
@@ -428,7 +431,7 @@ fn png_waterfall(
     pair: &[(&str, &nlsdof::signal_processing::stft::Spectrogram)],
     band: Option<(f64, f64)>,
     title: &str,
-) -> Result<bool, CliError> {
+) -> Result<bool, ReportError> {
     nlsdof_io::atomic::write_atomic(path, &nlsdof_figure::waterfall_png(pair, band, title)?)?;
     Ok(true)
 }
@@ -1012,7 +1015,7 @@ fn finite_or_null(v: f64) -> Value {
 /// The exponent landscape of the unloaded wing's generalised fit with the
 /// linear part free (`g-free`): where the equation-error minima are and
 /// where the output error ended. `false` if that fit is absent.
-fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, CliError> {
+fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, ReportError> {
     let Some(id) = demo
         .runs
         .first()
@@ -1021,7 +1024,7 @@ fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, CliError> {
     else {
         return Ok(false);
     };
-    let svg = crate::cmd::landscape_plot::render(id, crate::cmd::landscape_plot::Kind::Svg)?;
+    let svg = crate::landscape::render(id, crate::landscape::Kind::Svg)?;
     write_svg(
         dir,
         "fig10_landscape.svg",
@@ -1030,13 +1033,17 @@ fn fig_landscape(demo: &Demo, dir: &Path) -> Result<bool, CliError> {
     Ok(true)
 }
 
-pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliError> {
-    let pb = super::progress::stage_bar(8, "6/6 report");
-    pb.set_message("figures (SVG, PNG) and tables");
+/// Number of times [`write_all`] calls its `step` callback.
+pub const WRITE_STEPS: u64 = 8;
+
+/// Writes the figures (SVG, PNG) and the tables (CSV) of the report into
+/// `dir`, calling `step` [`WRITE_STEPS`] times as it goes (for a progress
+/// bar).
+pub fn write_all(demo: &Demo, dir: &Path, step: &dyn Fn()) -> Result<Written, ReportError> {
     fig2(demo, dir)?;
-    pb.inc(1);
+    step();
     fig4(demo, dir)?;
-    pb.inc(1);
+    step();
     fit_figure(
         demo,
         dir,
@@ -1044,7 +1051,7 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
         "fig5_classic.svg",
         "Fig 5 analogue: classic model (Duffing + quadratic damping), fitted to (top) levels 1-2, (middle) levels 4-5, (bottom) all levels — dots: data, lines: model",
     )?;
-    pb.inc(1);
+    step();
     fit_figure(
         demo,
         dir,
@@ -1052,7 +1059,7 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
         "fig6_duffing_generalised.svg",
         "Fig 6 analogue: Duffing stiffness + generalised damping, (top) integer η, (bottom) real η",
     )?;
-    pb.inc(1);
+    step();
     fit_figure(
         demo,
         dir,
@@ -1060,13 +1067,13 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
         "fig7_generalised.svg",
         "Fig 7 analogue: generalised stiffness and damping, (top) integer ρ, η, (bottom) real ρ, η",
     )?;
-    pb.inc(1);
+    step();
     fig_rms(demo, dir)?;
     fig_time(demo, dir)?;
     let landscape = fig_landscape(demo, dir)?;
-    pb.inc(1);
+    step();
     let pngs = fig8_png(demo, dir)?;
-    pb.inc(1);
+    step();
     let tables = build_tables(demo);
     for t in &tables {
         write_atomic(
@@ -1074,8 +1081,7 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
             t.csv().as_bytes(),
         )?;
     }
-    pb.inc(1);
-    pb.finish_and_clear();
+    step();
     let mut figures: Vec<(String, String)> = vec![
         ("fig2_stepped_sine_data.svg".into(), "Fig 2".into()),
         ("fig4_linear_frf.svg".into(), "Fig 4".into()),
@@ -1097,7 +1103,7 @@ pub fn write_all(demo: &Demo, dir: &Path, _out: &Path) -> Result<Written, CliErr
 }
 
 /// Adds the timings, writes `summary.json`, `tables/timings.csv` and `report.md`.
-pub fn finish(demo: &Demo, dir: &Path, w: Written, total: f64) -> Result<Value, CliError> {
+pub fn finish(demo: &Demo, dir: &Path, w: Written, total: f64) -> Result<Value, ReportError> {
     let mut summary = w.summary;
     let timings: serde_json::Map<String, Value> = demo
         .timings
@@ -1137,7 +1143,7 @@ pub fn finish(demo: &Demo, dir: &Path, w: Written, total: f64) -> Result<Value, 
             .expect("json")
             .as_bytes(),
     )?;
-    let md = super::markdown::report_md(demo, &w.tables, &w.figures, &tt);
+    let md = markdown::report_md(demo, &w.tables, &w.figures, &tt);
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     Ok(summary)
 }

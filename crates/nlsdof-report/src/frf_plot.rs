@@ -15,7 +15,7 @@
 //! * the swept points as small circles and each jump as a vertical arrow;
 //! * the backbone (undamped free-vibration frequency vs amplitude) dotted grey.
 
-use crate::error::CliError;
+use crate::ReportError;
 use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
 use nlsdof::{backbone, Formulation, LevelResponse, NormalisedModel, SweepDirection};
 use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style, GREY};
@@ -51,7 +51,7 @@ pub fn branches(
     level: &LevelResponse,
     f_min: f64,
     f_max: f64,
-) -> Result<Vec<TracedBranch>, CliError> {
+) -> Result<Vec<TracedBranch>, ReportError> {
     let opts = BranchOptions {
         samples: SAMPLES,
         radians_per_unit: 2.0 * PI,
@@ -131,7 +131,7 @@ fn tick_label(v: f64, span: f64) -> String {
 }
 
 /// Renders the SVG document (in memory; the caller writes it atomically).
-pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
+pub fn render_frf(p: &FrfPlot) -> Result<String, ReportError> {
     Ok(figure::render(
         &p.title,
         &[frf_panel(p)?],
@@ -142,7 +142,7 @@ pub fn render_frf(p: &FrfPlot) -> Result<String, CliError> {
 }
 
 /// The figure's one panel: branches, swept points, jumps, backbone.
-fn frf_panel(p: &FrfPlot) -> Result<Panel, CliError> {
+fn frf_panel(p: &FrfPlot) -> Result<Panel, ReportError> {
     let mut level_lines: Vec<Vec<TracedBranch>> = Vec::with_capacity(p.levels.len());
     let mut a_max: f64 = 0.0;
     for l in p.levels {
@@ -347,7 +347,7 @@ mod tests {
 
 /// `--plot` of the SVG plots: a name asking for another format (`.png`,
 /// `.pdf`, ...) is refused instead of getting SVG content under it.
-pub fn check_svg_name(path: Option<&std::path::Path>) -> Result<(), CliError> {
+pub fn check_svg_name(path: Option<&std::path::Path>) -> Result<(), ReportError> {
     let Some(path) = path else { return Ok(()) };
     let ext = path
         .extension()
@@ -357,7 +357,7 @@ pub fn check_svg_name(path: Option<&std::path::Path>) -> Result<(), CliError> {
         "png", "jpg", "jpeg", "gif", "bmp", "pdf", "eps", "ps", "tif", "tiff", "webp", "html",
     ];
     if OTHER.contains(&ext.as_str()) {
-        return Err(CliError::Usage(format!(
+        return Err(ReportError::Invalid(format!(
             "--plot {}: this plot is written as SVG only; give a .svg file name (PNG figures: nlsdof spectrogram --plot)",
             path.display()
         )));

@@ -2,7 +2,7 @@
 //! an SVG/PNG heat map of `log10(cost / cost_min)` over `(rho, eta)`, with
 //! the grid minima (white rings) and the fitted exponents (red cross).
 
-use crate::error::CliError;
+use crate::ReportError;
 use nlsdof::identification::models::{ETA, RHO};
 use nlsdof::identification::Identification;
 use plotters::coord::Shift;
@@ -19,7 +19,7 @@ pub enum Kind {
 }
 
 /// The format asked for by `path`'s extension.
-pub fn kind_of(path: &Path) -> Result<Kind, CliError> {
+pub fn kind_of(path: &Path) -> Result<Kind, ReportError> {
     match path
         .extension()
         .and_then(|e| e.to_str())
@@ -29,22 +29,22 @@ pub fn kind_of(path: &Path) -> Result<Kind, CliError> {
         Some("json") => Ok(Kind::Json),
         Some("svg") => Ok(Kind::Svg),
         Some("png") => Ok(Kind::Png),
-        _ => Err(CliError::Usage(format!(
+        _ => Err(ReportError::Invalid(format!(
             "--landscape {}: the name must end in .json, .svg or .png",
             path.display()
         ))),
     }
 }
 
-fn draw_err<E: std::fmt::Display>(e: E) -> CliError {
-    CliError::Usage(format!("cannot draw the landscape figure: {e}"))
+fn draw_err<E: std::fmt::Display>(e: E) -> ReportError {
+    ReportError::Invalid(format!("cannot draw the landscape figure: {e}"))
 }
 
 const W: u32 = 820;
 const H: u32 = 640;
 
 /// The file's bytes.
-pub fn render(id: &Identification, kind: Kind) -> Result<Vec<u8>, CliError> {
+pub fn render(id: &Identification, kind: Kind) -> Result<Vec<u8>, ReportError> {
     let l = &id.landscape;
     match kind {
         Kind::Json => {
@@ -90,7 +90,7 @@ pub fn render(id: &Identification, kind: Kind) -> Result<Vec<u8>, CliError> {
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     id: &Identification,
-) -> Result<(), CliError> {
+) -> Result<(), ReportError> {
     let l = &id.landscape;
     root.fill(&WHITE).map_err(draw_err)?;
     let (nr, ne) = (l.rho.len(), l.eta.len());

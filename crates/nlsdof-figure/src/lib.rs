@@ -28,10 +28,14 @@
 //! ```
 
 pub mod fonts;
+mod grid_map;
 mod panel;
 mod spectrogram;
 
+pub use grid_map::{grid_map_png, grid_map_svg, GridMap};
 pub use panel::*;
+/// Colours of series (the palette is [`COLOURS`]).
+pub use plotters::style::RGBColor;
 pub use spectrogram::{encode_png, heatmap_png, viridis, waterfall_png, DYNAMIC_RANGE_DB};
 
 /// Why a figure could not be made.

@@ -306,8 +306,18 @@ fn draw_panel<DB: DrawingBackend>(
         .label_style(("sans-serif", 12))
         .bold_line_style(MESH.0)
         .light_line_style(MESH.1)
+        // no axis lines or tick marks from plotters (they would be SVG
+        // polylines, beside the data's): the plot area gets a frame below
+        // and the grid carries the ticks
+        .axis_style(TRANSPARENT)
         .draw()
         .map_err(plot_err)?;
+    let (fx, fy) = chart.plotting_area().get_pixel_range();
+    root.draw(&Rectangle::new(
+        [(fx.start, fy.start), (fx.end, fy.end)],
+        DARK.stroke_width(1),
+    ))
+    .map_err(plot_err)?;
     let inside = |&(x, y): &(f64, f64)| {
         x.is_finite() && y.is_finite() && x >= x0 && x <= x1 && y >= y0 && y <= y1
     };
@@ -408,12 +418,16 @@ fn draw_panel<DB: DrawingBackend>(
         let y = by + 4 + row * i as i32 + row / 2;
         let (lx0, lx1) = (bx + 6, bx + 32);
         match s.style {
-            Style::Line(wd) => root
-                .draw(&PathElement::new(
-                    vec![(lx0, y), (lx1, y)],
-                    s.colour.stroke_width(wd.max(2)),
+            // a solid swatch is a filled bar, so that the SVG's polylines
+            // are the data's lines only (scripts count them)
+            Style::Line(wd) => {
+                let h = wd.max(2) as i32;
+                root.draw(&Rectangle::new(
+                    [(lx0, y - h / 2), (lx1, y - h / 2 + h)],
+                    s.colour.filled(),
                 ))
-                .map_err(plot_err)?,
+                .map_err(plot_err)?
+            }
             Style::Dashed(wd) => root
                 .draw(&DashedPathElement::new(
                     vec![(lx0, y), (lx1, y)],

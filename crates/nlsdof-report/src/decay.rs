@@ -4,7 +4,7 @@
 
 use crate::ReportError;
 use nlsdof::identification::decay::{DecayAnalysis, Fitted};
-use plotters::prelude::*;
+use nlsdof_figure::{self as figure, colour, Panel, Series, Style, GREY};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 
@@ -83,10 +83,6 @@ pub fn decay_text(rec: &DecayRecord, r: &DecayAnalysis, analyse_s: f64) -> Strin
     s
 }
 
-fn plot_err<E: std::fmt::Display>(e: E) -> ReportError {
-    ReportError::Invalid(format!("cannot draw the plot: {e}"))
-}
-
 fn fitted_json(f: &Fitted) -> Value {
     let p: Vec<_> = (0..3)
         .map(|k| {
@@ -96,140 +92,125 @@ fn fitted_json(f: &Fitted) -> Value {
     json!({"parameters": p, "rms": f.rms})
 }
 
-/// SVG of the record `x` (sampled at `fs` Hz from `t0` s) with the analysis.
+/// SVG of the record `x` (sampled at `fs` Hz from `t0` s) with the
+/// analysis: the record with its Hilbert envelope and the fitted model's
+/// envelope; the backbone f(a) (points: Hilbert, line: fitted); the
+/// damping curve, decay rate −d ln a/dt against amplitude.
 pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<String, ReportError> {
-    let mut s = String::new();
-    {
-        let root = SVGBackend::with_string(&mut s, (1200, 800)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
-        let (top, bottom) = root.split_vertically(400);
-        let (bl, br) = bottom.split_horizontally(600);
-        let blue = RGBColor(31, 119, 180);
-        let red = RGBColor(214, 39, 40);
-        let grey = RGBColor(150, 150, 150);
-        let t = |k: usize| t0 + k as f64 / fs;
-        let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-        let mean = x.iter().sum::<f64>() / x.len() as f64;
-        let mut ch = ChartBuilder::on(&top)
-            .caption(
-                "record (grey), Hilbert envelope (blue), fitted model's envelope (red)",
-                ("sans-serif", 16),
-            )
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(80)
-            .build_cartesian_2d(t(0)..t(x.len() - 1), -1.1 * xmax..1.1 * xmax)
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("t [s]")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        let step = (x.len() / 20_000).max(1);
-        ch.draw_series(LineSeries::new(
-            (0..x.len()).step_by(step).map(|k| (t(k), x[k] - mean)),
-            grey.stroke_width(1),
-        ))
-        .map_err(plot_err)?;
-        ch.draw_series(LineSeries::new(
-            r.amplitude
-                .iter()
-                .enumerate()
-                .map(|(k, &a)| (t(r.start + k), a)),
-            blue.stroke_width(2),
-        ))
-        .map_err(plot_err)?;
-        ch.draw_series(LineSeries::new(
-            r.model_amplitude
-                .iter()
-                .enumerate()
-                .map(|(k, &a)| (t(r.start + k), a)),
-            red.stroke_width(2),
-        ))
-        .map_err(plot_err)?;
-        let amax = r.backbone.iter().fold(0.0f64, |m, p| m.max(p.amplitude)) * 1.05;
-        let (f0, f1) = r
-            .backbone
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| {
-                (a.min(p.f_hz), b.max(p.f_hz))
-            });
-        let pad = 0.1 * (f1 - f0).max(1e-3 * f1);
-        let m = r.model();
-        let g = |mu: f64| nlsdof::power_law::g_unchecked(mu);
-        let curve = |a: f64| {
-            let w2 = m.alpha + g(m.rho) * m.beta * a.powf(m.rho);
-            w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
-        };
-        let mut ch = ChartBuilder::on(&bl)
-            .caption(
-                "backbone: points (Hilbert), line (fitted)",
-                ("sans-serif", 16),
-            )
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(80)
-            .build_cartesian_2d(f0 - pad..f1 + pad, 0.0..amax)
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("f [Hz]")
-            .y_desc("amplitude")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        ch.draw_series(
+    let (blue, red) = (colour(0), colour(1));
+    let t = |k: usize| t0 + k as f64 / fs;
+    let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let mut record = Panel::new(
+        "record (grey), Hilbert envelope (blue), fitted model's envelope (red)",
+        "t [s]",
+        "response",
+    );
+    record.x_range = Some((t(0), t(x.len() - 1)));
+    record.y_range = Some((-1.1 * xmax, 1.1 * xmax));
+    let step = (x.len() / 20_000).max(1);
+    let envelope = |a: &[f64]| -> Vec<(f64, f64)> {
+        a.iter()
+            .enumerate()
+            .map(|(k, &a)| (t(r.start + k), a))
+            .collect()
+    };
+    record.series = vec![
+        Series::new(
+            (0..x.len())
+                .step_by(step)
+                .map(|k| (t(k), x[k] - mean))
+                .collect(),
+            GREY,
+            Style::Line(1),
+        )
+        .label("record"),
+        Series::new(envelope(&r.amplitude), blue, Style::Line(2)).label("Hilbert envelope"),
+        Series::new(envelope(&r.model_amplitude), red, Style::Line(2)).label("fitted model"),
+    ];
+    let amax = r.backbone.iter().fold(0.0f64, |m, p| m.max(p.amplitude)) * 1.05;
+    let (f0, f1) = r
+        .backbone
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+            (a.min(p.f_hz), b.max(p.f_hz))
+        });
+    let pad = 0.1 * (f1 - f0).max(1e-3 * f1);
+    let m = r.model();
+    let g = |mu: f64| nlsdof::power_law::g_unchecked(mu);
+    // backbone of the fitted model, Hz: ω² = α + g(ρ) β a^ρ
+    let curve = |a: f64| {
+        let w2 = m.alpha + g(m.rho) * m.beta * a.powf(m.rho);
+        w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+    };
+    let mut backbone = Panel::new(
+        "backbone: points (Hilbert), line (fitted)",
+        "f [Hz]",
+        "amplitude",
+    );
+    backbone.x_range = Some((f0 - pad, f1 + pad));
+    backbone.y_range = Some((0.0, amax));
+    backbone.series = vec![
+        Series::new(
+            r.backbone.iter().map(|p| (p.f_hz, p.amplitude)).collect(),
+            blue,
+            Style::Filled(3),
+        ),
+        Series::new(
+            (0..=100)
+                .map(|i| {
+                    let a = amax * i as f64 / 100.0;
+                    (curve(a), a)
+                })
+                .collect(),
+            red,
+            Style::Line(2),
+        ),
+    ];
+    let lmax = r.backbone.iter().fold(0.0f64, |mx, p| mx.max(p.decay_rate)) * 1.2;
+    let lmin = r
+        .backbone
+        .iter()
+        .fold(f64::INFINITY, |mn, p| mn.min(p.decay_rate))
+        .min(0.0);
+    let dm = r.damping.values;
+    // decay rate of the fitted damping, 1/s: (δ + g(η) κ (ω a)^η) / 2
+    let rate = |a: f64| {
+        let w = 2.0 * std::f64::consts::PI * curve(a);
+        0.5 * (dm[0] + g(dm[2]) * dm[1] * (w * a).powf(dm[2]))
+    };
+    let mut damping = Panel::new(
+        "damping curve: decay rate -d ln a/dt",
+        "amplitude",
+        "lambda [1/s]",
+    );
+    damping.x_range = Some((0.0, amax));
+    damping.y_range = Some((lmin, lmax.max(1e-12)));
+    damping.series = vec![
+        Series::new(
             r.backbone
                 .iter()
-                .map(|p| Circle::new((p.f_hz, p.amplitude), 3, blue.filled())),
-        )
-        .map_err(plot_err)?;
-        ch.draw_series(LineSeries::new(
-            (0..=100).map(|i| {
-                let a = amax * i as f64 / 100.0;
-                (curve(a), a)
-            }),
-            red.stroke_width(2),
-        ))
-        .map_err(plot_err)?;
-        let lmax = r.backbone.iter().fold(0.0f64, |mx, p| mx.max(p.decay_rate)) * 1.2;
-        let lmin = r
-            .backbone
-            .iter()
-            .fold(f64::INFINITY, |mn, p| mn.min(p.decay_rate))
-            .min(0.0);
-        let dm = r.damping.values;
-        let rate = |a: f64| {
-            let w = 2.0 * std::f64::consts::PI * curve(a);
-            0.5 * (dm[0] + g(dm[2]) * dm[1] * (w * a).powf(dm[2]))
-        };
-        let mut ch = ChartBuilder::on(&br)
-            .caption("damping curve: decay rate -d ln a/dt", ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(80)
-            .build_cartesian_2d(0.0..amax, lmin..lmax.max(1e-12))
-            .map_err(plot_err)?;
-        ch.configure_mesh()
-            .x_desc("amplitude")
-            .y_desc("lambda [1/s]")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        ch.draw_series(
-            r.backbone
-                .iter()
-                .map(|p| Circle::new((p.amplitude, p.decay_rate), 3, blue.filled())),
-        )
-        .map_err(plot_err)?;
-        ch.draw_series(LineSeries::new(
-            (1..=100).map(|i| {
-                let a = amax * i as f64 / 100.0;
-                (a, rate(a))
-            }),
-            red.stroke_width(2),
-        ))
-        .map_err(plot_err)?;
-        root.present().map_err(plot_err)?;
-    }
-    Ok(s)
+                .map(|p| (p.amplitude, p.decay_rate))
+                .collect(),
+            blue,
+            Style::Filled(3),
+        ),
+        Series::new(
+            (1..=100)
+                .map(|i| {
+                    let a = amax * i as f64 / 100.0;
+                    (a, rate(a))
+                })
+                .collect(),
+            red,
+            Style::Line(2),
+        ),
+    ];
+    Ok(figure::render(
+        "Free decay",
+        &[record, backbone, damping],
+        1,
+        1200,
+        360,
+    )?)
 }

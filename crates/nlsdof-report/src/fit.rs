@@ -13,6 +13,7 @@ use nlsdof::identification::{
 };
 use nlsdof::identification::{Parameter, Parameters};
 use nlsdof::{Model, SweepDirection};
+use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style};
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -29,107 +30,50 @@ fn status_name(s: Status) -> &'static str {
     }
 }
 
-/// Minimal SVG: measured amplitudes (dots) and the model's branch-following
-/// amplitudes at the same steps (lines), one colour per curve.
-pub fn fit_svg(data: &Dataset, res: &FitResult) -> String {
-    const W: f64 = 900.0;
-    const H: f64 = 560.0;
-    const L: f64 = 80.0;
-    const R: f64 = 170.0;
-    const T: f64 = 30.0;
-    const B: f64 = 50.0;
-    const COLOURS: [&str; 9] = [
-        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#bcbd22",
-        "#17becf",
-    ];
-    let (mut f0, mut f1, mut a1) = (f64::INFINITY, 0.0f64, 0.0f64);
-    for c in &data.curves {
-        for (&w, &a) in c.omegas.iter().zip(&c.amplitudes) {
-            f0 = f0.min(hz(w));
-            f1 = f1.max(hz(w));
-            a1 = a1.max(a);
-        }
-    }
-    a1 = a1.max(res.model_amplitudes.iter().cloned().fold(0.0, f64::max)) * 1.05;
-    if !(a1 > 0.0) {
-        a1 = 1.0;
-    }
-    let x = |f: f64| L + (f - f0) / (f1 - f0).max(1e-300) * (W - L - R);
-    let y = |a: f64| H - B - a / a1 * (H - T - B);
-    let mut s = format!("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
-    let _ = writeln!(s, "<text x=\"{}\" y=\"18\" text-anchor=\"middle\">nlsdof fit: {} (dots: data, lines: model), cost {:.4e}</text>", W / 2.0, res.kind, res.cost);
-    let _ = writeln!(
-        s,
-        "<rect x=\"{L}\" y=\"{T}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>",
-        W - L - R,
-        H - T - B
+/// SVG of a sweep fit: measured amplitudes (dots, every point up to 300
+/// per curve) and the model's branch-following amplitudes at the same steps
+/// (one line per curve), one colour per curve, zero-to-peak in m against Hz.
+pub fn fit_svg(data: &Dataset, res: &FitResult) -> Result<String, ReportError> {
+    let mut panel = Panel::new(
+        format!(
+            "nlsdof fit: {} (dots: data, lines: model), cost {:.4e}",
+            res.kind, res.cost
+        ),
+        "frequency [Hz]",
+        "amplitude [m]",
     );
-    for k in 0..=5 {
-        let f = f0 + (f1 - f0) * k as f64 / 5.0;
-        let a = a1 * k as f64 / 5.0;
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{f:.1}</text>",
-            x(f),
-            H - B + 18.0
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{a:.2e}</text>",
-            L - 6.0,
-            y(a) + 4.0
-        );
+    panel.legend = Corner::Outside;
+    let top = data
+        .curves
+        .iter()
+        .flat_map(|c| c.amplitudes.iter())
+        .chain(&res.model_amplitudes)
+        .fold(0.0f64, |m, &a| if a.is_finite() { m.max(a) } else { m });
+    if top > 0.0 {
+        panel.y_range = Some((0.0, 1.05 * top));
     }
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">frequency [Hz]</text>",
-        L + (W - L - R) / 2.0,
-        H - 12.0
-    );
-    let _ = writeln!(s, "<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">amplitude [m]</text>", H / 2.0, H / 2.0);
     let mut off = 0;
     for (i, c) in data.curves.iter().enumerate() {
-        let col = COLOURS[i % COLOURS.len()];
         let n = c.omegas.len();
-        let pts: Vec<String> = (0..n)
-            .map(|k| {
-                format!(
-                    "{:.2},{:.2}",
-                    x(hz(c.omegas[k])),
-                    y(res.model_amplitudes[off + k])
-                )
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            "<polyline fill=\"none\" stroke=\"{col}\" stroke-width=\"1.5\" points=\"{}\"/>",
-            pts.join(" ")
-        );
+        let f: Vec<f64> = c.omegas.iter().map(|&w| hz(w)).collect();
+        let model = (0..n).map(|k| (f[k], res.model_amplitudes[off + k]));
         let stride = (n / 300).max(1);
-        for k in (0..n).step_by(stride) {
-            let _ = writeln!(
-                s,
-                "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"1.8\" fill=\"{col}\"/>",
-                x(hz(c.omegas[k])),
-                y(c.amplitudes[k])
-            );
-        }
+        let measured = (0..n).step_by(stride).map(|k| (f[k], c.amplitudes[k]));
         let dir = if c.direction == SweepDirection::Up {
             "up"
         } else {
             "down"
         };
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{}\" fill=\"{col}\">{} ({dir})</text>",
-            W - R + 12.0,
-            T + 16.0 * (i as f64 + 1.0),
-            c.level
+        panel.series.push(
+            Series::new(model.collect(), colour(i), Style::Line(2))
+                .label(format!("{} ({dir})", c.level)),
         );
+        panel
+            .series
+            .push(Series::new(measured.collect(), colour(i), Style::Filled(2)));
         off += n;
     }
-    s.push_str("</svg>\n");
-    s
+    Ok(figure::render("Stepped-sine fit", &[panel], 1, 1100, 600)?)
 }
 
 /// JSON of the stages of [`identify`] (equation error, landscape,

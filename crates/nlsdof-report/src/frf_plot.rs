@@ -1,10 +1,8 @@
 //! SVG plot of `nlsdof frf`: amplitude (zero-to-peak) vs frequency (Hz).
 //!
-//! Drawn with `plotters` using only its SVG backend (no bitmap backend, no
-//! `ttf`/font-kit): the SVG backend writes text as `<text>` elements that the
-//! viewer renders, so no system fonts are needed at run time; plotters only
-//! estimates text extents for layout, which is why the legend is laid out by
-//! hand in its own panel on the right instead of plotters' legend box.
+//! Drawn by [`nlsdof_figure`] as SVG: text is written as `<text>` elements
+//! that the viewer renders, so no system fonts are needed at run time, and
+//! the legend sits in its own strip right of the plot.
 //!
 //! Contents, per input level (one colour each):
 //! * all steady-state branches: `steady_states` on ~600 frequencies plus the
@@ -18,8 +16,8 @@
 use crate::ReportError;
 use nlsdof::harmonic_balance::branches::{trace_branches, BranchOptions, TracedBranch};
 use nlsdof::{backbone, Formulation, LevelResponse, NormalisedModel, SweepDirection};
+use nlsdof_figure::RGBColor;
 use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style, GREY};
-use plotters::prelude::*;
 use std::f64::consts::PI;
 
 /// Unstable branches and the backbone.

@@ -513,7 +513,7 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         files.push((out.clone(), model_file_text(res, mass)?.into_bytes()));
     }
     if let Some(p) = &args.plot {
-        files.push((p.clone(), fit_svg(&id.data, res).into_bytes()));
+        files.push((p.clone(), fit_svg(&id.data, res)?.into_bytes()));
     }
     if let (Some(p), Some(k)) = (&args.landscape, landscape_kind) {
         files.push((p.clone(), nlsdof_report::landscape::render(&id, k)?));
@@ -643,7 +643,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         files.push((out.clone(), model_file_text(&res, mass)?.into_bytes()));
     }
     if let Some(p) = &args.plot {
-        files.push((p.clone(), fit_svg(&data, &res).into_bytes()));
+        files.push((p.clone(), fit_svg(&data, &res)?.into_bytes()));
     }
     for (p, bytes) in &files {
         nlsdof_io::atomic::write_atomic(p, bytes)?;

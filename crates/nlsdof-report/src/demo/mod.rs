@@ -120,7 +120,7 @@ fn fig2(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
     write_svg(dir, "fig2_stepped_sine_data.svg", svg)
 }
 
-const RGBA_BLACK: plotters::style::RGBColor = plotters::style::RGBColor(0, 0, 0);
+const RGBA_BLACK: nlsdof_figure::RGBColor = nlsdof_figure::RGBColor(0, 0, 0);
 
 fn max_y(p: &Panel) -> f64 {
     p.series

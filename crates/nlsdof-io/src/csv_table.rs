@@ -1,18 +1,67 @@
-//! The CSV reader of the table formats, built on the `csv` crate: rows
+//! The one CSV reader of every text format, built on the `csv` crate: rows
 //! streamed one at a time with their line numbers, fields trimmed, blank
 //! lines and `#` comment lines skipped, a leading UTF-8 byte-order mark
 //! dropped (Excel writes one), columns found by header name
-//! (case-insensitive), and optionally decimal commas (fields then separated
-//! by `;`). Fields are split at the separator without quoting, like the
-//! hand-written readers it replaces.
+//! (case-insensitive), and optionally decimal commas. Fields are split at
+//! the [`Separator`] without quoting. The instrument exports use it too:
+//! Polytec (tab-separated, latin-1, decimal commas), LabVIEW `.lvm`
+//! (tab-separated), time histories separated by commas, semicolons or
+//! whitespace.
 
 use std::io::Read;
+
+/// How the fields of a line are separated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Separator {
+    /// `,`, or `;` when numbers have decimal commas.
+    #[default]
+    Standard,
+    Comma,
+    Semicolon,
+    Tab,
+    /// Decided line by line: `,` if the line has one, else `;` if it has
+    /// one, else runs of whitespace (the time-history exports).
+    PerLine,
+}
+
+/// How bytes become text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Encoding {
+    /// UTF-8; a line that is not is an error.
+    #[default]
+    Utf8,
+    /// UTF-8, invalid bytes replaced by U+FFFD.
+    Utf8Lossy,
+    /// ISO 8859-1 (Polytec exports): every byte is a character.
+    Latin1,
+}
 
 /// How the text is laid out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct CsvOptions {
-    /// Numbers written with a decimal comma (`1,5`); fields separated by `;`.
+    /// Numbers written with a decimal comma (`1,5`); with
+    /// [`Separator::Standard`] fields are then separated by `;`.
     pub decimal_comma: bool,
+    pub separator: Separator,
+    pub encoding: Encoding,
+}
+
+impl CsvOptions {
+    /// The options with `separator`.
+    pub fn with_separator(mut self, separator: Separator) -> Self {
+        self.separator = separator;
+        self
+    }
+    /// The options with `encoding`.
+    pub fn with_encoding(mut self, encoding: Encoding) -> Self {
+        self.encoding = encoding;
+        self
+    }
+    /// The options with decimal commas.
+    pub fn with_decimal_comma(mut self) -> Self {
+        self.decimal_comma = true;
+        self
+    }
 }
 
 /// Why a row could not be read.
@@ -35,10 +84,57 @@ impl std::fmt::Display for CsvReadError {
 
 impl std::error::Error for CsvReadError {}
 
+/// The csv crate skips empty lines and then reports the next record at
+/// the empty line's number. This adapter writes a space into every empty
+/// line, so that each line is a record and the line numbers stay right (a
+/// blank record is skipped by [`CsvRows::next_row`]).
+struct KeepBlankLines<R> {
+    inner: R,
+    buf: Vec<u8>,
+    pos: usize,
+    at_line_start: bool,
+}
+
+impl<R: Read> KeepBlankLines<R> {
+    fn new(inner: R) -> Self {
+        Self {
+            inner,
+            buf: Vec::new(),
+            pos: 0,
+            at_line_start: true,
+        }
+    }
+}
+
+impl<R: Read> Read for KeepBlankLines<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        if self.pos == self.buf.len() {
+            let mut raw = [0u8; 1 << 16];
+            let n = self.inner.read(&mut raw)?;
+            if n == 0 {
+                return Ok(0);
+            }
+            self.buf.clear();
+            self.pos = 0;
+            for &b in &raw[..n] {
+                if b == b'\n' && self.at_line_start {
+                    self.buf.push(b' ');
+                }
+                self.buf.push(b);
+                self.at_line_start = b == b'\n';
+            }
+        }
+        let k = (self.buf.len() - self.pos).min(out.len());
+        out[..k].copy_from_slice(&self.buf[self.pos..self.pos + k]);
+        self.pos += k;
+        Ok(k)
+    }
+}
+
 /// A streaming reader of the data rows (and the header, which is just the
 /// first row).
 pub struct CsvRows<R: Read> {
-    rdr: csv::Reader<R>,
+    rdr: csv::Reader<KeepBlankLines<R>>,
     rec: csv::ByteRecord,
     fields: Vec<String>,
     first: bool,
@@ -53,9 +149,16 @@ impl<R: Read> CsvRows<R> {
             .quoting(false)
             // lines end at '\n' only (a '\r' before it is trimmed), as `str::lines`
             .terminator(csv::Terminator::Any(b'\n'))
-            .delimiter(if options.decimal_comma { b';' } else { b',' })
+            .delimiter(match options.separator {
+                Separator::Standard if options.decimal_comma => b';',
+                Separator::Standard | Separator::Comma => b',',
+                Separator::Semicolon => b';',
+                Separator::Tab => b'\t',
+                // the whole line is one record field, split in `next_row`
+                Separator::PerLine => b'\0',
+            })
             .buffer_capacity(1 << 20)
-            .from_reader(read);
+            .from_reader(KeepBlankLines::new(read));
         Self {
             rdr,
             rec: csv::ByteRecord::new(),
@@ -82,8 +185,26 @@ impl<R: Read> CsvRows<R> {
             let line = self.rec.position().map(|p| p.line()).unwrap_or(0);
             self.fields.clear();
             for raw in self.rec.iter() {
-                let text = std::str::from_utf8(raw).map_err(|_| CsvReadError::Utf8 { line })?;
-                self.fields.push(text.to_string());
+                let text = match self.options.encoding {
+                    Encoding::Utf8 => std::str::from_utf8(raw)
+                        .map_err(|_| CsvReadError::Utf8 { line })?
+                        .to_string(),
+                    Encoding::Utf8Lossy => String::from_utf8_lossy(raw).into_owned(),
+                    Encoding::Latin1 => raw.iter().map(|&b| b as char).collect(),
+                };
+                if self.options.separator == Separator::PerLine {
+                    let text = text.trim_end_matches('\r');
+                    if text.contains(',') {
+                        self.fields.extend(text.split(',').map(str::to_string));
+                    } else if text.contains(';') {
+                        self.fields.extend(text.split(';').map(str::to_string));
+                    } else {
+                        self.fields
+                            .extend(text.split_whitespace().map(str::to_string));
+                    }
+                } else {
+                    self.fields.push(text);
+                }
             }
             if std::mem::take(&mut self.first) {
                 if let Some(f) = self.fields.first_mut() {
@@ -175,12 +296,7 @@ mod tests {
     #[test]
     fn skips_comments_blanks_and_bom_and_reads_decimal_commas() {
         let text = "\u{feff}T ; X\n# a comment\n\n   \n  # indented comment\n0;1,5\n1 ; -2,25\n";
-        let mut r = CsvRows::new(
-            text.as_bytes(),
-            CsvOptions {
-                decimal_comma: true,
-            },
-        );
+        let mut r = CsvRows::new(text.as_bytes(), CsvOptions::default().with_decimal_comma());
         let (line, header) = r.next_row().unwrap().unwrap();
         assert_eq!(
             (line, header.to_vec()),
@@ -210,5 +326,59 @@ mod tests {
         let mut r = CsvRows::new("a,\"b\n1,2\n".as_bytes(), CsvOptions::default());
         assert_eq!(r.next_row().unwrap().unwrap().1, ["a", "\"b"]);
         assert_eq!(r.next_row().unwrap().unwrap().1, ["1", "2"]);
+    }
+
+    #[test]
+    fn tab_latin1_and_decimal_commas_together() {
+        // "µ" is 0xB5 in latin-1: not UTF-8
+        let bytes = b"Freq\tAmp \xb5m\n1,5\t-2,25\n";
+        let opts = CsvOptions::default()
+            .with_separator(Separator::Tab)
+            .with_encoding(Encoding::Latin1)
+            .with_decimal_comma();
+        let mut r = CsvRows::new(&bytes[..], opts);
+        assert_eq!(r.next_row().unwrap().unwrap().1, ["Freq", "Amp \u{b5}m"]);
+        let row = r.next_row().unwrap().unwrap().1.to_vec();
+        assert_eq!(
+            (r.number(&row[0]), r.number(&row[1])),
+            (Some(1.5), Some(-2.25))
+        );
+        // the same bytes as UTF-8 are refused, with the line
+        let mut r = CsvRows::new(&bytes[..], opts.with_encoding(Encoding::Utf8));
+        assert!(matches!(r.next_row(), Err(CsvReadError::Utf8 { line: 1 })));
+        // and read lossily
+        let mut r = CsvRows::new(&bytes[..], opts.with_encoding(Encoding::Utf8Lossy));
+        assert_eq!(r.next_row().unwrap().unwrap().1, ["Freq", "Amp \u{fffd}m"]);
+    }
+
+    #[test]
+    fn per_line_separator_and_bom() {
+        let text = "\u{feff}t x y\n0,1,2\n1;3;4\n 2  5\t6 \r\n";
+        let opts = CsvOptions::default().with_separator(Separator::PerLine);
+        let mut r = CsvRows::new(text.as_bytes(), opts);
+        assert_eq!(r.next_row().unwrap().unwrap().1, ["t", "x", "y"]);
+        assert_eq!(r.next_row().unwrap().unwrap().1, ["0", "1", "2"]);
+        assert_eq!(r.next_row().unwrap().unwrap().1, ["1", "3", "4"]);
+        let (line, row) = r.next_row().unwrap().unwrap();
+        assert_eq!(
+            (line, row),
+            (4, &["2".to_string(), "5".into(), "6".into()][..])
+        );
+        assert!(r.next_row().unwrap().is_none());
+    }
+
+    #[test]
+    fn line_numbers_count_empty_lines() {
+        // the csv crate alone reports "b" at line 2 and "d" at line 5
+        let text = "a\n\nb\n\n\n\nd\n";
+        let mut r = CsvRows::new(text.as_bytes(), CsvOptions::default());
+        assert_eq!(r.next_row().unwrap().unwrap().0, 1);
+        assert_eq!(r.next_row().unwrap().unwrap().0, 3);
+        let (line, row) = r.next_row().unwrap().unwrap();
+        assert_eq!((line, row), (7, &["d".to_string()][..]));
+        assert!(r.next_row().unwrap().is_none());
+        // also when the file starts with an empty line
+        let mut r = CsvRows::new("\nx,y\n".as_bytes(), CsvOptions::default());
+        assert_eq!(r.next_row().unwrap().unwrap().0, 2);
     }
 }

@@ -32,7 +32,7 @@
 //! columns frequency (Hz), amplitude and phase (deg) of run 1 and run 2.
 
 use crate::atomic::AtomicFile;
-use crate::csv_table::{CsvOptions, CsvRows};
+use crate::csv_table::{CsvOptions, CsvReadError, CsvRows, Encoding, Separator};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -113,6 +113,14 @@ pub struct FrfTable {
 
 fn find(names: &[String], wanted: &[&str]) -> Option<usize> {
     names.iter().position(|n| wanted.contains(&n.as_str()))
+}
+
+/// A row that could not be read (I/O or encoding), as a content error.
+fn csv_error(path: &Path, e: CsvReadError) -> FrfFileError {
+    FrfFileError::Content {
+        path: path.into(),
+        message: e.to_string(),
+    }
 }
 
 fn parse_num(path: &Path, line: usize, field: &str) -> Result<f64, FrfFileError> {
@@ -373,20 +381,12 @@ pub fn parse_time_history(
     let mut header: Option<Vec<String>> = None;
     let mut cols: Vec<Vec<f64>> = Vec::new();
     let mut lines = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = raw.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = if line.contains(',') {
-            line.split(',').map(str::trim).collect()
-        } else if line.contains(';') {
-            line.split(';').map(str::trim).collect()
-        } else {
-            line.split_whitespace().collect()
-        };
+    let opts = CsvOptions::default().with_separator(Separator::PerLine);
+    let mut rows = CsvRows::new(text.as_bytes(), opts);
+    while let Some((line, fields)) = rows.next_row().map_err(|e| csv_error(path, e))? {
+        let line = line as usize;
         if header.is_none() && cols.is_empty() && fields.iter().any(|f| f.parse::<f64>().is_err()) {
-            header = Some(fields.iter().map(|s| s.to_string()).collect());
+            header = Some(fields.to_vec());
             continue;
         }
         if cols.is_empty() {
@@ -395,14 +395,14 @@ pub fn parse_time_history(
         if fields.len() != cols.len() {
             return Err(FrfFileError::Line {
                 path: path.into(),
-                line: i + 1,
+                line,
                 message: format!("expected {} columns, found {}", cols.len(), fields.len()),
             });
         }
         for (c, f) in fields.iter().enumerate() {
-            cols[c].push(parse_num(path, i + 1, f)?);
+            cols[c].push(parse_num(path, line, f)?);
         }
-        lines.push(i + 1);
+        lines.push(line);
     }
     if cols.is_empty() {
         return Err(FrfFileError::Empty { path: path.into() });
@@ -456,26 +456,25 @@ fn read_polytec_time(
     let mut t = Vec::new();
     let mut v = Vec::new();
     let mut lines = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = raw.trim();
-        if let Some(rest) = line.strip_prefix("Signal:") {
+    let opts = CsvOptions::default().with_separator(Separator::Tab);
+    let mut rows = CsvRows::new(text.as_bytes(), opts);
+    while let Some((line, fields)) = rows.next_row().map_err(|e| csv_error(path, e))? {
+        let line = line as usize;
+        let joined = fields.join("\t");
+        if let Some(rest) = joined.strip_prefix("Signal:") {
             // "Time - Ref1 Force - Samples" -> "Ref1 Force"
             let parts: Vec<&str> = rest.split(" - ").map(str::trim).collect();
             name = parts.get(1).unwrap_or(&parts[0]).to_string();
             continue;
         }
-        let fields: Vec<&str> = line.split('\t').map(str::trim).collect();
         if fields.len() != 2 {
             if t.is_empty() {
                 continue;
             }
-            if line.is_empty() {
-                continue;
-            }
             return Err(FrfFileError::Line {
                 path: path.into(),
-                line: i + 1,
-                message: format!("expected 'time<TAB>value', found {line:?}"),
+                line,
+                message: format!("expected 'time<TAB>value', found {joined:?}"),
             });
         }
         match (fields[0].parse::<f64>(), fields[1].parse::<f64>()) {
@@ -483,20 +482,20 @@ fn read_polytec_time(
                 if !(a.is_finite() && b.is_finite()) {
                     return Err(FrfFileError::Line {
                         path: path.into(),
-                        line: i + 1,
+                        line,
                         message: format!("non-finite sample {a}, {b}"),
                     });
                 }
                 t.push(a);
                 v.push(b);
-                lines.push(i + 1);
+                lines.push(line);
             }
             _ if t.is_empty() => continue,
             _ => {
                 return Err(FrfFileError::Line {
                     path: path.into(),
-                    line: i + 1,
-                    message: format!("{line:?} is not 'time<TAB>value'"),
+                    line,
+                    message: format!("{joined:?} is not 'time<TAB>value'"),
                 })
             }
         }
@@ -542,15 +541,20 @@ pub fn read_polytec_sweep(path: &Path) -> Result<Vec<SweepRun>, FrfFileError> {
 /// Parses a Polytec swept-sine export held in `bytes` (latin-1; `path` only
 /// names it in errors).
 pub fn parse_polytec_sweep(bytes: &[u8], path: &Path) -> Result<Vec<SweepRun>, FrfFileError> {
-    let text: String = bytes.iter().map(|&b| b as char).collect(); // latin-1
+    let opts = CsvOptions::default()
+        .with_separator(Separator::Tab)
+        .with_encoding(Encoding::Latin1)
+        .with_decimal_comma();
+    let mut rows = CsvRows::new(bytes, opts);
     let mut runs: Vec<SweepRun> = Vec::new();
-    for (i, raw) in text.lines().enumerate().skip(2) {
-        let line = raw.trim();
-        if line.is_empty() {
+    while let Some((line, fields)) = rows.next_row().map_err(|e| csv_error(path, e))? {
+        // two header lines
+        if line <= 2 {
             continue;
         }
-        let vals = line
-            .split('\t')
+        let i = line as usize - 1;
+        let vals = fields
+            .iter()
             .map(|f| parse_num(path, i + 1, &f.replace(',', ".")))
             .collect::<Result<Vec<f64>, _>>()?;
         if vals.len() < 3 || (vals.len() - 1) % 2 != 0 {

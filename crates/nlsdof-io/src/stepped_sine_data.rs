@@ -15,7 +15,9 @@
 //!   phases are relative to the vibrometer's reference channel, not a lag
 //!   behind the base acceleration, so they are not used.
 
-use crate::csv_table::{column, lowercase, CsvOptions, CsvReadError, CsvRows, Row};
+use crate::csv_table::{
+    column, lowercase, number, CsvOptions, CsvReadError, CsvRows, Row, Separator,
+};
 use nlsdof::identification::{DataError, Dataset, Record};
 use nlsdof::SweepDirection;
 use std::path::{Path, PathBuf};
@@ -96,6 +98,45 @@ fn convert(opts: &ReadOptions, gamma: f64, omega: f64, amplitude: f64) -> (f64, 
     (g, a)
 }
 
+/// One row of the long format, as read (before the [`ReadOptions`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Columns<'a> {
+    pub level: &'a str,
+    /// Input level (unit per [`ReadOptions`]).
+    pub gamma: f64,
+    pub f_hz: f64,
+    /// Amplitude (kind and unit per [`ReadOptions`]).
+    pub amplitude: f64,
+    /// Phase lag, degrees.
+    pub phase_deg: Option<f64>,
+    /// `up` or `down` (case-insensitive); empty or `None`: up.
+    pub sweep: Option<&'a str>,
+    pub weight: Option<f64>,
+}
+
+/// The record of one row: γ and the amplitude converted to zero-to-peak SI
+/// displacement, Ω = 2π f, the phase in radians. The CSV reader and the
+/// Python module (columns given as arrays) both build their records here.
+pub fn record(opts: &ReadOptions, row: &Columns) -> Result<Record, String> {
+    let omega = TWO_PI * row.f_hz;
+    let (gamma, amplitude) = convert(opts, row.gamma, omega, row.amplitude);
+    let direction = match row.sweep {
+        None | Some("") => SweepDirection::Up,
+        Some(s) if s.eq_ignore_ascii_case("up") => SweepDirection::Up,
+        Some(s) if s.eq_ignore_ascii_case("down") => SweepDirection::Down,
+        Some(s) => return Err(format!("sweep = '{s}' must be 'up' or 'down'")),
+    };
+    Ok(Record {
+        level: row.level.to_string(),
+        gamma,
+        omega,
+        amplitude,
+        phase: row.phase_deg.map(f64::to_radians),
+        direction,
+        weight: row.weight.unwrap_or(1.0),
+    })
+}
+
 /// Parses the long CSV format from text (`path` only names it in errors).
 pub fn parse_csv(
     text: &str,
@@ -138,33 +179,16 @@ pub fn parse_csv(
         let row = Row::new(fields, cols.len()).map_err(err)?;
         let get = |c: usize, name: &str| row.field(c, name).map_err(err);
         let num = |c: usize, name: &str| row.number(c, name).map_err(err);
-        let level = get(cl, "level")?.to_string();
-        let f = num(cf, "f_hz")?;
-        let omega = TWO_PI * f;
-        let (gamma, amplitude) = convert(opts, num(cg, "gamma")?, omega, num(ca, "amplitude")?);
-        let phase = match cp {
-            Some(c) => Some(num(c, "phase_deg")?.to_radians()),
-            None => None,
+        let row = Columns {
+            level: get(cl, "level")?,
+            f_hz: num(cf, "f_hz")?,
+            gamma: num(cg, "gamma")?,
+            amplitude: num(ca, "amplitude")?,
+            phase_deg: cp.map(|c| num(c, "phase_deg")).transpose()?,
+            sweep: cs.map(|c| get(c, "sweep")).transpose()?,
+            weight: cw.map(|c| num(c, "weight")).transpose()?,
         };
-        let direction = match cs.map(|c| get(c, "sweep")).transpose()? {
-            None | Some("") => SweepDirection::Up,
-            Some(s) if s.eq_ignore_ascii_case("up") => SweepDirection::Up,
-            Some(s) if s.eq_ignore_ascii_case("down") => SweepDirection::Down,
-            Some(s) => return Err(err(format!("sweep = '{s}' must be 'up' or 'down'"))),
-        };
-        let weight = match cw {
-            Some(c) => num(c, "weight")?,
-            None => 1.0,
-        };
-        recs.push(Record {
-            level,
-            gamma,
-            omega,
-            amplitude,
-            phase,
-            direction,
-            weight,
-        });
+        recs.push(record(opts, &row).map_err(err)?);
     }
     Dataset::from_records(&recs).map_err(|source| SteppedSineDataError::Data {
         path: path.into(),
@@ -193,10 +217,6 @@ pub fn beam_level_g(file_name: &str) -> Option<f64> {
         .filter(|v: &f64| v.is_finite() && *v > 0.0)
 }
 
-fn decimal_comma(s: &str) -> Option<f64> {
-    s.trim().replace(',', ".").parse().ok()
-}
-
 /// Records of one beam file (velocity amplitudes converted to displacement;
 /// phases in rad as measured, in the instrument's convention — see
 /// `nlsdof::identification::equation_error` for how the convention is
@@ -210,22 +230,30 @@ pub fn parse_beam_file(
     let label = format!("{level_g}g");
     let gamma = level_g * STANDARD_GRAVITY;
     let mut recs = Vec::new();
-    for (i, line) in text.lines().enumerate().skip(2) {
-        if line.trim().is_empty() {
+    let opts = CsvOptions::default()
+        .with_separator(Separator::Tab)
+        .with_decimal_comma();
+    let mut rows = CsvRows::new(text.as_bytes(), opts);
+    let read_err = |e: CsvReadError| SteppedSineDataError::Read {
+        path: path.into(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    };
+    while let Some((line, fields)) = rows.next_row().map_err(read_err)? {
+        // two header lines
+        if line <= 2 {
             continue;
         }
-        let lineno = i + 1;
-        let fields: Vec<&str> = line.split('\t').collect();
+        let lineno = line as usize;
         let num = |k: usize, name: &str| -> Result<f64, SteppedSineDataError> {
             let s = fields.get(k).ok_or_else(|| SteppedSineDataError::Line {
                 path: path.into(),
                 line: lineno,
                 message: format!("missing column {} ({name})", k + 1),
             })?;
-            decimal_comma(s).ok_or_else(|| SteppedSineDataError::Line {
+            number(s, opts).ok_or_else(|| SteppedSineDataError::Line {
                 path: path.into(),
                 line: lineno,
-                message: format!("{name} = '{}' is not a number", s.trim()),
+                message: format!("{name} = '{s}' is not a number"),
             })
         };
         let f = num(0, "frequency")?;

@@ -17,6 +17,7 @@
 //!   field must be a finite number; errors name the file, the line and the
 //!   field. Unselected columns are not parsed (they may be empty).
 
+use crate::csv_table::{CsvOptions, CsvRows, Encoding, Separator};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -106,35 +107,49 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
         None
     };
     let skip = units.map_or(skip, |u| u - 1);
-    let mut lines = text
+    // the first line that is not skipped decides the separator
+    let Some((first_no, first)) = text
         .lines()
         .enumerate()
         .skip(skip)
         .filter(|(i, _)| Some(*i) != units)
         .map(|(i, l)| (i as u64 + 1, l.trim_end_matches('\r')))
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-        .peekable();
-    let Some(&(first_no, first)) = lines.peek() else {
+        .find(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+    else {
         return Err(TableError::Empty { path: path.into() });
     };
-    let delim = if first.contains('\t') {
-        '\t'
+    let separator = if first.contains('\t') {
+        Separator::Tab
     } else if first.contains(';') && !first.contains(',') {
-        ';'
+        Separator::Semicolon
     } else {
-        ','
+        Separator::Comma
     };
-    let split = |l: &str| -> Vec<String> {
-        l.split(delim)
-            .map(|f| f.trim().trim_matches('"').trim().to_string())
-            .collect()
+    let opts = CsvOptions::default()
+        .with_separator(separator)
+        .with_encoding(Encoding::Utf8Lossy);
+    let mut rows = CsvRows::new(bytes, opts);
+    let unquote = |f: &str| f.trim_matches('"').trim().to_string();
+    // the rows from the first one on (header or data), without the units line
+    let mut next = || -> Option<(u64, Vec<String>)> {
+        loop {
+            // a byte slice cannot fail to read, and the encoding is lossy
+            let (line, fields) = rows.next_row().ok()??;
+            if line < first_no || Some(line as usize - 1) == units {
+                continue;
+            }
+            return Some((line, fields.iter().map(|f| unquote(f)).collect()));
+        }
     };
-    let head = split(first);
+    let Some((_, head)) = next() else {
+        return Err(TableError::Empty { path: path.into() });
+    };
     let header = head.iter().any(|f| !f.is_empty() && parse_num(f).is_none());
+    let mut pending = None;
     let names: Vec<String> = if header {
-        lines.next();
         head.clone()
     } else {
+        pending = Some((first_no, head.clone()));
         (0..head.len()).map(|i| i.to_string()).collect()
     };
     let shown = || {
@@ -174,8 +189,7 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
         }
     }
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); wanted.len()];
-    for (line, l) in lines {
-        let fields: Vec<&str> = l.split(delim).collect();
+    while let Some((line, fields)) = pending.take().or_else(&mut next) {
         for (c, &i) in idx.iter().enumerate() {
             let Some(f) = fields.get(i) else {
                 return Err(TableError::ShortLine {
@@ -185,7 +199,6 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
                     fields: fields.len(),
                 });
             };
-            let f = f.trim().trim_matches('"');
             match parse_num(f) {
                 Some(v) => columns[c].push(v),
                 None => {
@@ -199,7 +212,6 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
             }
         }
     }
-    let _ = first_no;
     if columns.first().map(|c| c.is_empty()).unwrap_or(true) {
         return Err(TableError::Empty { path: path.into() });
     }

@@ -76,6 +76,32 @@ pub fn fit_svg(data: &Dataset, res: &FitResult) -> Result<String, ReportError> {
     Ok(figure::render("Stepped-sine fit", &[panel], 1, 1100, 600)?)
 }
 
+/// The JSON document of a staged fit ([`nlsdof::identification::identify()`]):
+/// `nlsdof fit --json` and the Python `FitResult.to_dict()`. The fit's
+/// document ([`result_json`]) with the jump weight and the stages
+/// ([`identification_json`]).
+pub fn identification_document(
+    id: &Identification,
+    mass: Option<f64>,
+) -> Result<Value, ReportError> {
+    let mut v = result_json(&id.data, &id.fit, mass)?;
+    v["jump_weight"] = json!(id.jump_weight);
+    v["identification"] = identification_json(id);
+    Ok(v)
+}
+
+/// The text report of a staged fit: the fit's report (its first line is
+/// the warning, if any), then the stages that led to it.
+pub fn identification_report(
+    id: &Identification,
+    mass: Option<f64>,
+) -> Result<String, ReportError> {
+    let mut s = result_text(&id.data, &id.fit, mass)?;
+    s.push('\n');
+    s.push_str(&identification_text(id));
+    Ok(s)
+}
+
 /// JSON of the stages of [`identify`] (equation error, landscape,
 /// phase convention, gain decision, candidates).
 pub fn identification_json(id: &Identification) -> Value {

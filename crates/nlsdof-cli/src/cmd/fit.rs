@@ -16,8 +16,8 @@ use std::path::{Path, PathBuf};
 
 pub use super::progress::progress_bar;
 pub use nlsdof_report::fit::{
-    fit_svg, identification_json, identification_text, integer_pairs_json, integer_pairs_text,
-    model_file_text, pq_text, result_json, result_text,
+    fit_svg, integer_pairs_json, integer_pairs_text, model_file_text, pq_text, result_json,
+    result_text,
 };
 
 /// `--weighting` (see [`Weighting`]).
@@ -522,17 +522,10 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         nlsdof_io::atomic::write_atomic(p, bytes)?;
     }
     if args.json {
-        let mut v = result_json(&id.data, res, mass)?;
-        v["jump_weight"] = json!(id.jump_weight);
-        v["identification"] = identification_json(&id);
+        let v = nlsdof_report::fit::identification_document(&id, mass)?;
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
-        // the fit report first (its first line is the warning, if any),
-        // then the stages that led to it
-        let mut s = result_text(&id.data, res, mass)?;
-        s.push('\n');
-        s.push_str(&identification_text(&id));
-        print!("{s}");
+        print!("{}", nlsdof_report::fit::identification_report(&id, mass)?);
     }
     Ok(())
 }

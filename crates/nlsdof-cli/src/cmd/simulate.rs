@@ -4,7 +4,8 @@
 use crate::error::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nlsdof::simulation::{
-    simulate, simulate_upsampled, Method, Options, Sample, State, Upsampling,
+    simulate, simulate_record, simulate_upsampled, Method, Options, RecordMethod, Sample, State,
+    Upsampling,
 };
 use nlsdof::Model;
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid};
@@ -23,7 +24,7 @@ const ERROR_WARN: f64 = 1e-3;
 /// Default RK4 on uniform sampling: the input upsampled this many times by
 /// cubics and integrated with two fine samples per step, h = 2/(4 fs) =
 /// 1/(2 fs).
-const CUBIC_FACTOR: usize = 4;
+const CUBIC_FACTOR: usize = nlsdof::simulation::DEFAULT_UPSAMPLING;
 
 /// `--method` values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -318,17 +319,18 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
     };
     let summary = match signal.grid {
-        SignalGrid::Uniform { t0, fs } if cubic => simulate_upsampled(
-            &nm,
-            input.raw(),
-            (gain, t0, fs),
-            &Upsampling {
-                factor: CUBIC_FACTOR,
-                initial,
-            },
-            &mut |s: Sample| sink(s.index, s.u, s.x, s.v),
-        )?,
-        _ => simulate(&nm, &input, &opts, |s: Sample| sink(s.index, s.u, s.x, s.v))?,
+        SignalGrid::Uniform { t0, fs } => {
+            let record = match method {
+                _ if cubic => RecordMethod::Rk4Cubic,
+                Method::Rk4 { samples_per_step } => RecordMethod::Rk4 { samples_per_step },
+                Method::DormandPrince { rtol, atol } => RecordMethod::DormandPrince { rtol, atol },
+            };
+            let mut each = |s: Sample| sink(s.index, s.u, s.x, s.v);
+            simulate_record(&nm, input.raw(), (gain, t0, fs), record, initial, &mut each)?
+        }
+        SignalGrid::Times(_) => {
+            simulate(&nm, &input, &opts, |s: Sample| sink(s.index, s.u, s.x, s.v))?
+        }
     };
     drop(sink);
     if let Some(e) = write_err {

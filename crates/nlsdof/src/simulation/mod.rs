@@ -95,7 +95,9 @@ pub(crate) mod rk4_step;
 mod upsampled;
 
 pub use crate::error::SimulationError;
-pub use upsampled::{simulate_upsampled, Upsampling};
+pub use upsampled::{
+    simulate_record, simulate_upsampled, RecordMethod, Upsampling, DEFAULT_UPSAMPLING,
+};
 
 use crate::excitation::{Excitation, SampledInput};
 use crate::model::AsNormalised;

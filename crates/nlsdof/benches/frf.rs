@@ -54,6 +54,23 @@ fn bench(c: &mut Criterion) {
             })
         },
     );
+    // what the Python `Model.sweep(gamma=[5 levels], f_hz=200 points)`
+    // runs: the reference of its call-overhead figure
+    c.bench_function(
+        "frf wing 5x200 level_responses (the Python sweep's computation)",
+        |b| {
+            b.iter(|| {
+                level_responses(
+                    black_box(&wing),
+                    &wing_levels,
+                    &omegas,
+                    SweepDirection::Up,
+                    Formulation::HarmonicBalance,
+                )
+                .unwrap()
+            })
+        },
+    );
     let duff = duffing();
     let duff_levels = [0.25, 0.5, 1.0, 1.5, 2.0];
     c.bench_function("frf strong duffing 5x200 sweep up (jumps)", |b| {

@@ -5,7 +5,7 @@
 //! cross-validation (fit the lower half of the levels, predict the upper).
 //!
 //! ```text
-//! cargo run --release -p nlsdof-cli --example real_data_tables -- [SHARED_DATA_DIR] [MODEL,..]
+//! cargo run --release -p nlsdof-studies --example real_data_tables -- [SHARED_DATA_DIR] [MODEL,..]
 //! ```
 use nlsdof::identification::models::*;
 use nlsdof::identification::*;

@@ -2,7 +2,7 @@
 //! (clamped-clamped beam, cc_beam_no_magnet_24C, up-sweeps, free gain):
 //!
 //! ```text
-//! cargo run --release -p nlsdof-cli --example beam_jumps -- \
+//! cargo run --release -p nlsdof-studies --example beam_jumps -- \
 //!     MODEL LAMBDA STARTS DECIMATE [GAIN_MAX RHO_MAX ETA_MIN BETA_BOUND_FACTOR]
 //! ```
 //!

@@ -1,0 +1,53 @@
+"""nlsdof: identify and simulate nonlinear single-degree-of-freedom power-law
+models of vibrating structures (Rust core).
+
+    m x'' + c x' + k x + c_e x'|x'|^eta + k_r x|x|^rho = m gamma(t)
+
+SI units throughout; input levels gamma (m/s^2) and amplitudes (m) are
+zero-to-peak; frequencies are in Hz. Equation numbers refer to Civera et al.
+(2021), "Generalised power-law stiffness and damping for nonlinear
+reduced-order models".
+
+Entry points: ``g``, ``Model`` (steady_states, sweep, simulate,
+stepped_sine), ``fit`` with ``read_stepped_sine``/``read_beam_dir``,
+``linear_id``, ``spectrogram``, ``compare_spectrograms``. Every error of the
+library is a ``ValueError`` with the same one-line message as the CLI.
+"""
+
+from ._nlsdof import (
+    FitResult,
+    Jump,
+    Model,
+    RigSweep,
+    SteadyState,
+    SteppedSineData,
+    Spectrogram,
+    Sweep,
+    __version__,
+    compare_spectrograms,
+    fit,
+    g,
+    linear_id,
+    read_beam_dir,
+    read_stepped_sine,
+    spectrogram,
+)
+
+__all__ = [
+    "FitResult",
+    "Jump",
+    "Model",
+    "RigSweep",
+    "SteadyState",
+    "SteppedSineData",
+    "Spectrogram",
+    "Sweep",
+    "__version__",
+    "compare_spectrograms",
+    "fit",
+    "g",
+    "linear_id",
+    "read_beam_dir",
+    "read_stepped_sine",
+    "spectrogram",
+]

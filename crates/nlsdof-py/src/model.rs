@@ -1,0 +1,504 @@
+//! `nlsdof.Model` and what it computes: steady states and sweeps of the
+//! first-order harmonic balance (paper Eq 12-30), time simulation (Eq 32)
+//! and the virtual stepped-sine rig.
+
+use crate::arrays::{f64_array, values};
+use crate::convert::{to_py, value_error};
+use nlsdof::simulation::{simulate_record, RecordMethod, Sample, State};
+use nlsdof::stepped_sine::{run_sweeps, RigOptions};
+use nlsdof::{level_responses, ForcedResponse};
+use nlsdof_report::steady_state::{sweep_json, SweepRequest};
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+
+/// `(x, v)`: displacement (m) and velocity (m/s) at every input sample.
+type Trajectory<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
+/// A power-law SDoF model (SI units):
+///
+///     m x'' + c x' + k x + c_e x'|x'|^eta + k_r x|x|^rho = m gamma(t)
+///
+/// `Model(mass, stiffness, damping, nonlinear_stiffness=(k_r, rho),
+/// nonlinear_damping=(c_e, eta))`: mass in kg, stiffness k in N/m, damping
+/// c in N s/m, k_r in N/m^(1+rho), c_e in N (s/m)^(1+eta); exponents > -3.
+/// Input levels gamma are accelerations in m/s^2 and amplitudes are in m,
+/// both zero-to-peak; frequencies are in Hz.
+#[pyclass(frozen, name = "Model", module = "nlsdof")]
+#[derive(Clone)]
+pub struct Model {
+    pub inner: nlsdof::Model,
+}
+
+#[pymethods]
+impl Model {
+    #[new]
+    #[pyo3(signature = (mass, stiffness, damping, nonlinear_stiffness=None, nonlinear_damping=None))]
+    fn new(
+        mass: f64,
+        stiffness: f64,
+        damping: f64,
+        nonlinear_stiffness: Option<(f64, f64)>,
+        nonlinear_damping: Option<(f64, f64)>,
+    ) -> PyResult<Self> {
+        let mut m = nlsdof::Model::linear(mass, stiffness, damping).map_err(value_error)?;
+        if let Some((k_r, rho)) = nonlinear_stiffness {
+            m = m.with_stiffness(k_r, rho).map_err(value_error)?;
+        }
+        if let Some((c_e, eta)) = nonlinear_damping {
+            m = m.with_damping(c_e, eta).map_err(value_error)?;
+        }
+        Ok(Self { inner: m })
+    }
+
+    /// Reads a model file (TOML, SI units; the format of `nlsdof --help`).
+    #[staticmethod]
+    fn from_toml(path: PathBuf) -> PyResult<Self> {
+        let inner = nlsdof_io::model_file::read_model(&path).map_err(value_error)?;
+        Ok(Self { inner })
+    }
+
+    /// The model file (TOML) of this model.
+    fn to_toml(&self) -> String {
+        nlsdof_io::model_file::model_to_toml(&self.inner)
+    }
+
+    /// Mass m, kg.
+    #[getter]
+    fn mass(&self) -> f64 {
+        self.inner.mass
+    }
+    /// Linear stiffness k, N/m.
+    #[getter]
+    fn stiffness(&self) -> f64 {
+        self.inner.stiffness
+    }
+    /// Linear damping c, N s/m.
+    #[getter]
+    fn damping(&self) -> f64 {
+        self.inner.damping
+    }
+    /// (k_r, rho) or None.
+    #[getter]
+    fn nonlinear_stiffness(&self) -> Option<(f64, f64)> {
+        self.inner
+            .nonlinear_stiffness
+            .map(|p| (p.coefficient, p.exponent))
+    }
+    /// (c_e, eta) or None.
+    #[getter]
+    fn nonlinear_damping(&self) -> Option<(f64, f64)> {
+        self.inner
+            .nonlinear_damping
+            .map(|p| (p.coefficient, p.exponent))
+    }
+    /// Linear natural frequency sqrt(k/m) / (2 pi), Hz.
+    #[getter]
+    fn f_n_hz(&self) -> f64 {
+        self.inner.omega_n() / TAU
+    }
+    /// Linear damping ratio c / (2 m omega_n).
+    #[getter]
+    fn zeta(&self) -> f64 {
+        self.inner.zeta()
+    }
+
+    fn __repr__(&self) -> String {
+        let f = |p: Option<(f64, f64)>| match p {
+            Some((c, e)) => format!("({c:?}, {e:?})"),
+            None => "None".into(),
+        };
+        format!(
+            "Model(mass={:?}, stiffness={:?}, damping={:?}, nonlinear_stiffness={}, nonlinear_damping={})",
+            self.inner.mass,
+            self.inner.stiffness,
+            self.inner.damping,
+            f(self.nonlinear_stiffness()),
+            f(self.nonlinear_damping())
+        )
+    }
+
+    /// Every steady state at input level `gamma` (m/s^2, zero-to-peak) and
+    /// frequency `f_hz` (Hz): first-order harmonic balance (Eq 12-30), with
+    /// phase lag (deg) and stability, ordered by amplitude. An empty list
+    /// when there is no steady motion (Coulomb friction sticks).
+    #[pyo3(signature = (gamma, f_hz, formulation="hb"))]
+    fn steady_states(
+        &self,
+        py: Python<'_>,
+        gamma: f64,
+        f_hz: f64,
+        formulation: &str,
+    ) -> PyResult<Vec<SteadyState>> {
+        let form = crate::convert::formulation(formulation)?;
+        let model = &self.inner;
+        let set = py
+            .detach(|| {
+                let r = ForcedResponse::new(model, gamma, form)?;
+                r.steady_states(TAU * f_hz)
+            })
+            .map_err(value_error)?;
+        Ok(set
+            .roots
+            .iter()
+            .map(|r| SteadyState {
+                amplitude: r.amplitude,
+                phase_deg: r.phase.to_degrees(),
+                stable: r.stable,
+            })
+            .collect())
+    }
+
+    /// A stepped-sine sweep at level `gamma` (m/s^2, zero-to-peak) over the
+    /// frequencies `f_hz` (Hz, increasing), `direction` "up" or "down": the
+    /// branch a sweep follows, with its jumps and folds (as `nlsdof frf`).
+    /// With a sequence of levels, one `Sweep` per level (computed in
+    /// parallel).
+    #[pyo3(signature = (gamma, f_hz, direction="up", formulation="hb"))]
+    fn sweep<'py>(
+        &self,
+        py: Python<'py>,
+        gamma: &Bound<'py, PyAny>,
+        f_hz: &Bound<'py, PyAny>,
+        direction: &str,
+        formulation: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let dir = crate::convert::direction(direction)?;
+        let form = crate::convert::formulation(formulation)?;
+        let (gammas, one) = match gamma.extract::<f64>() {
+            Ok(g) => (vec![g], true),
+            Err(_) => (values(&f64_array(gamma, "gamma")?).into_owned(), false),
+        };
+        let f = f64_array(f_hz, "f_hz")?;
+        let f = values(&f);
+        if f.is_empty() {
+            return Err(value_error("f_hz is empty: give at least one frequency"));
+        }
+        let omegas: Vec<f64> = f.iter().map(|f| TAU * f).collect();
+        let model = &self.inner;
+        let levels = py
+            .detach(|| level_responses(model, &gammas, &omegas, dir, form))
+            .map_err(value_error)?;
+        let (f_min, f_max, steps) = (f[0], f[f.len() - 1], f.len());
+        let mut out: Vec<Sweep> = levels
+            .into_iter()
+            .map(|level| Sweep {
+                model: self.inner,
+                level,
+                formulation: form,
+                band: (f_min, f_max, steps),
+            })
+            .collect();
+        if one {
+            Ok(Bound::new(py, out.remove(0))?.into_any())
+        } else {
+            Ok(out.into_pyobject(py)?.into_any())
+        }
+    }
+
+    /// Simulates Eq 32 driven by the input acceleration `u` (m/s^2) sampled
+    /// at `fs` Hz, from `x0` (m), `v0` (m/s). `method`: "rk4" (default: RK4
+    /// with h = 1/(2 fs) on the input read as cubics through the samples;
+    /// `samples_per_step=1|2` drives RK4 by the samples themselves) or
+    /// "dopri" (adaptive Dormand-Prince 5(4), `rtol`, `atol`). `base=True`:
+    /// `u` is a base acceleration and x the relative displacement (the
+    /// structure sees -u). Returns numpy arrays (x, v) at every sample, in m
+    /// and m/s; the same numbers as `nlsdof simulate`.
+    #[pyo3(signature = (u, fs, method="rk4", base=false, x0=0.0, v0=0.0, samples_per_step=None, rtol=1e-10, atol=1e-13))]
+    #[allow(clippy::too_many_arguments)]
+    fn simulate<'py>(
+        &self,
+        py: Python<'py>,
+        u: &Bound<'py, PyAny>,
+        fs: f64,
+        method: &str,
+        base: bool,
+        x0: f64,
+        v0: f64,
+        samples_per_step: Option<usize>,
+        rtol: f64,
+        atol: f64,
+    ) -> PyResult<Trajectory<'py>> {
+        let record = match (method.to_ascii_lowercase().as_str(), samples_per_step) {
+            ("rk4", None) => RecordMethod::Rk4Cubic,
+            ("rk4", Some(s)) => RecordMethod::Rk4 {
+                samples_per_step: s,
+            },
+            ("dopri", None) => RecordMethod::DormandPrince { rtol, atol },
+            ("dopri", Some(_)) => {
+                return Err(value_error(
+                    "samples_per_step applies to method=\"rk4\" only",
+                ))
+            }
+            _ => {
+                return Err(value_error(format!(
+                    "method {method:?} is not allowed: use \"rk4\" or \"dopri\""
+                )))
+            }
+        };
+        let arr = f64_array(u, "u")?;
+        let u = values(&arr);
+        let gain = if base { -1.0 } else { 1.0 };
+        let model = &self.inner;
+        let (x, v) = py
+            .detach(|| {
+                let mut x = Vec::with_capacity(u.len());
+                let mut v = Vec::with_capacity(u.len());
+                let mut sink = |s: Sample| {
+                    x.push(s.x);
+                    v.push(s.v);
+                };
+                let initial = State { x: x0, v: v0 };
+                simulate_record(model, &u, (gain, 0.0, fs), record, initial, &mut sink)
+                    .map(|_| (x, v))
+            })
+            .map_err(value_error)?;
+        Ok((PyArray1::from_vec(py, x), PyArray1::from_vec(py, v)))
+    }
+
+    /// The virtual stepped-sine rig: simulates the shaker dwell at each
+    /// frequency `f_hz` (Hz) at level `gamma` (m/s^2, zero-to-peak) until
+    /// the response is steady, and records the first-harmonic amplitude (m)
+    /// and phase lag (deg), as `nlsdof stepped-sine`.
+    #[pyo3(signature = (gamma, f_hz, direction="up", samples_per_cycle=64, tolerance=1e-4, max_cycles=5000))]
+    #[allow(clippy::too_many_arguments)]
+    fn stepped_sine(
+        &self,
+        py: Python<'_>,
+        gamma: f64,
+        f_hz: &Bound<'_, PyAny>,
+        direction: &str,
+        samples_per_cycle: usize,
+        tolerance: f64,
+        max_cycles: usize,
+    ) -> PyResult<RigSweep> {
+        let dir = crate::convert::direction(direction)?;
+        let f = f64_array(f_hz, "f_hz")?;
+        let omegas: Vec<f64> = values(&f).iter().map(|f| TAU * f).collect();
+        let opts = RigOptions {
+            samples_per_cycle,
+            tolerance,
+            max_cycles,
+            ..RigOptions::default()
+        };
+        let model = &self.inner;
+        let mut sweeps = py
+            .detach(|| run_sweeps(model, &[gamma], &omegas, &[dir], &opts, &|| {}))
+            .map_err(value_error)?;
+        let s = sweeps.remove(0);
+        let pts = &s.points;
+        Ok(RigSweep {
+            gamma,
+            f_hz: PyArray1::from_vec(py, pts.iter().map(|p| p.omega / TAU).collect()).unbind(),
+            amplitude: PyArray1::from_vec(py, pts.iter().map(|p| p.amplitude).collect()).unbind(),
+            phase_deg: PyArray1::from_vec(py, pts.iter().map(|p| p.phase.to_degrees()).collect())
+                .unbind(),
+            settled: PyArray1::from_vec(py, pts.iter().map(|p| p.settled).collect::<Vec<bool>>())
+                .unbind(),
+            cycles: PyArray1::from_vec(
+                py,
+                pts.iter().map(|p| p.cycles as u64).collect::<Vec<u64>>(),
+            )
+            .unbind(),
+            integration_error: pts.iter().map(|p| p.integration_error).fold(0.0, f64::max),
+            simulated_s: s.duration,
+            n: pts.len(),
+        })
+    }
+}
+
+/// One steady state: amplitude (m, zero-to-peak), phase lag of x behind
+/// the input (deg), and whether it is stable.
+#[pyclass(frozen, name = "SteadyState", module = "nlsdof")]
+pub struct SteadyState {
+    #[pyo3(get)]
+    amplitude: f64,
+    #[pyo3(get)]
+    phase_deg: f64,
+    #[pyo3(get)]
+    stable: bool,
+}
+
+#[pymethods]
+impl SteadyState {
+    fn __repr__(&self) -> String {
+        format!(
+            "SteadyState(amplitude={:?}, phase_deg={:?}, stable={})",
+            self.amplitude,
+            self.phase_deg,
+            if self.stable { "True" } else { "False" }
+        )
+    }
+}
+
+/// A jump of a sweep: frequency (Hz) and the amplitudes (m) before and after.
+#[pyclass(frozen, name = "Jump", module = "nlsdof")]
+pub struct Jump {
+    #[pyo3(get)]
+    f_hz: f64,
+    #[pyo3(get)]
+    amplitude_before: f64,
+    #[pyo3(get)]
+    amplitude_after: f64,
+}
+
+#[pymethods]
+impl Jump {
+    fn __repr__(&self) -> String {
+        format!(
+            "Jump(f_hz={:?}, amplitude_before={:?}, amplitude_after={:?})",
+            self.f_hz, self.amplitude_before, self.amplitude_after
+        )
+    }
+}
+
+/// A stepped-sine sweep of the first-order balance: numpy `f_hz`,
+/// `amplitude` (m; NaN where the response is unbounded), `phase_deg` (NaN
+/// where there is no motion) and `stable`; the `jumps`, the `folds_hz` and
+/// the `phase_quadrature` point `(f_hz, amplitude)`. Built on access.
+#[pyclass(frozen, name = "Sweep", module = "nlsdof")]
+pub struct Sweep {
+    model: nlsdof::Model,
+    level: nlsdof::LevelResponse,
+    formulation: nlsdof::Formulation,
+    /// f_min, f_max (Hz), steps.
+    band: (f64, f64, usize),
+}
+
+impl Sweep {
+    fn column<'py, T: numpy::Element>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&nlsdof::SweepPoint) -> T,
+    ) -> Bound<'py, PyArray1<T>> {
+        PyArray1::from_vec(py, self.level.sweep.points.iter().map(f).collect())
+    }
+}
+
+#[pymethods]
+impl Sweep {
+    /// Input level, m/s^2 zero-to-peak.
+    #[getter]
+    fn gamma(&self) -> f64 {
+        self.level.gamma
+    }
+    /// Frequencies, Hz.
+    #[getter]
+    fn f_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| p.omega / TAU)
+    }
+    /// Amplitudes followed by the sweep, m zero-to-peak (NaN: unbounded).
+    #[getter]
+    fn amplitude<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| if p.unbounded { f64::NAN } else { p.amplitude })
+    }
+    /// Phase lag of x behind the input, deg (NaN: no motion or unbounded).
+    #[getter]
+    fn phase_deg<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| {
+            if p.unbounded || p.sticking {
+                f64::NAN
+            } else {
+                p.phase.to_degrees()
+            }
+        })
+    }
+    /// Whether the followed state is stable.
+    #[getter]
+    fn stable<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.column(py, |p| p.stable)
+    }
+    /// The jumps of the sweep (list of `Jump`).
+    #[getter]
+    fn jumps(&self) -> Vec<Jump> {
+        self.level
+            .sweep
+            .jumps
+            .iter()
+            .map(|j| Jump {
+                f_hz: j.omega / TAU,
+                amplitude_before: j.amplitude_before,
+                amplitude_after: j.amplitude_after,
+            })
+            .collect()
+    }
+    /// Fold (limit-point) frequencies in the band, Hz.
+    #[getter]
+    fn folds_hz(&self) -> Vec<f64> {
+        self.level
+            .sweep
+            .folds
+            .iter()
+            .map(|f| f.omega / TAU)
+            .collect()
+    }
+    /// The phase-quadrature (90 deg) point `(f_hz, amplitude)`, or None.
+    #[getter]
+    fn phase_quadrature(&self) -> Option<(f64, f64)> {
+        self.level
+            .phase_quadrature
+            .map(|q| (q.omega / TAU, q.amplitude))
+    }
+    /// The level's entry of `nlsdof frf --json` (same keys and numbers).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let req = SweepRequest {
+            model_name: "",
+            direction: self.level.sweep.direction,
+            formulation: self.formulation,
+            steps: self.band.2,
+            f_min: self.band.0,
+            f_max: self.band.1,
+        };
+        let doc = sweep_json(&req, &self.model, std::slice::from_ref(&self.level));
+        to_py(py, &doc["levels"][0])
+    }
+
+    fn __len__(&self) -> usize {
+        self.level.sweep.points.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Sweep(gamma={:?}, {} points, {} jump(s), folds_hz={:?})",
+            self.level.gamma,
+            self.level.sweep.points.len(),
+            self.level.sweep.jumps.len(),
+            self.folds_hz()
+        )
+    }
+}
+
+/// A run of the virtual stepped-sine rig: numpy `f_hz`, `amplitude` (m),
+/// `phase_deg`, `settled`, `cycles`; the largest estimated
+/// `integration_error` (relative) and the `simulated_s` seconds.
+#[pyclass(frozen, name = "RigSweep", module = "nlsdof")]
+pub struct RigSweep {
+    #[pyo3(get)]
+    gamma: f64,
+    #[pyo3(get)]
+    f_hz: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    amplitude: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    phase_deg: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    settled: Py<PyArray1<bool>>,
+    #[pyo3(get)]
+    cycles: Py<PyArray1<u64>>,
+    #[pyo3(get)]
+    integration_error: f64,
+    #[pyo3(get)]
+    simulated_s: f64,
+    n: usize,
+}
+
+#[pymethods]
+impl RigSweep {
+    fn __repr__(&self) -> String {
+        format!(
+            "RigSweep(gamma={:?}, {} steps, {:.1} s simulated)",
+            self.gamma, self.n, self.simulated_s
+        )
+    }
+}

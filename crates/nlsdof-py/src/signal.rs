@@ -1,0 +1,363 @@
+//! Linear identification from an FRF (paper §2.3, Table 3) and STFT
+//! spectrograms with their comparison (paper §4.5, Eq 33).
+
+use crate::arrays::{f64_array, values};
+use crate::convert::{to_py, value_error};
+use nlsdof::signal_processing::stft::{Detrend, Scaling, StftOptions};
+use nlsdof::signal_processing::{compare_records, ComparisonOptions, Symmetry, Window};
+use nlsdof::vector_fitting::{
+    identify_sdof, FrfWeighting, InputKind, MeasuredFrf, OutputKind, PoleCount, SdofIdOptions, C64,
+};
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use std::f64::consts::TAU;
+
+/// Identifies the linear part of an SDoF from a measured FRF by fast
+/// relaxed vector fitting, with the half-power and circle-fit estimates
+/// (as `nlsdof linear-id --json`). `f_hz`: frequencies (Hz); `frf`: the
+/// complex FRF (or its magnitude only: then the half-power method);
+/// `input`: "acceleration" (base, m/s^2: only k/m and c/m unless `mass`)
+/// or "force" (N); `output`: "displacement", "velocity" or "acceleration";
+/// `poles`: number of complex pole pairs or "auto". Returns the document
+/// (dict): `sdof` holds alpha = k/m (1/s^2), delta = c/m (1/s), f_n_hz,
+/// zeta and, when the mass is known, m, k, c.
+#[pyfunction]
+#[pyo3(signature = (f_hz, frf, input="acceleration", output="displacement", mass=None, poles=None, max_poles=20, f_min=None, f_max=None, mode=None, constant=true, proportional=false, weight="uniform", max_iterations=30))]
+#[allow(clippy::too_many_arguments)]
+pub fn linear_id<'py>(
+    py: Python<'py>,
+    f_hz: &Bound<'py, PyAny>,
+    frf: &Bound<'py, PyAny>,
+    input: &str,
+    output: &str,
+    mass: Option<f64>,
+    poles: Option<&Bound<'py, PyAny>>,
+    max_poles: usize,
+    f_min: Option<f64>,
+    f_max: Option<f64>,
+    mode: Option<usize>,
+    constant: bool,
+    proportional: bool,
+    weight: &str,
+    max_iterations: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let f = f64_array(f_hz, "f_hz")?;
+    let f: Vec<f64> = values(&f).into_owned();
+    let np = py.import("numpy")?;
+    let complex: bool = np.call_method1("iscomplexobj", (frf,))?.extract()?;
+    let measured = if complex {
+        let re = f64_array(&np.call_method1("real", (frf,))?, "frf")?;
+        let im = f64_array(&np.call_method1("imag", (frf,))?, "frf")?;
+        let h: Vec<C64> = values(&re)
+            .iter()
+            .zip(values(&im).iter())
+            .map(|(&a, &b)| C64::new(a, b))
+            .collect();
+        MeasuredFrf::complex(f.iter().map(|f| TAU * f).collect(), h)
+    } else {
+        let m = f64_array(frf, "frf")?;
+        MeasuredFrf {
+            omega: f.iter().map(|f| TAU * f).collect(),
+            magnitude: values(&m).into_owned(),
+            values: None,
+        }
+    };
+    if measured.magnitude.len() != f.len() {
+        return Err(value_error(format!(
+            "frf has {} values but f_hz has {}",
+            measured.magnitude.len(),
+            f.len()
+        )));
+    }
+    let poles = match poles {
+        None => PoleCount::Auto {
+            max_pairs: max_poles,
+        },
+        Some(p) => match p.extract::<usize>() {
+            Ok(n) if n >= 1 => PoleCount::Fixed(n),
+            _ => match p.extract::<String>() {
+                Ok(s) if s.eq_ignore_ascii_case("auto") => PoleCount::Auto {
+                    max_pairs: max_poles,
+                },
+                _ => {
+                    return Err(value_error(
+                        "poles: expected a number of pole pairs >= 1 or \"auto\"",
+                    ))
+                }
+            },
+        },
+    };
+    let (lo, hi) = (
+        f_min.unwrap_or(f64::NEG_INFINITY),
+        f_max.unwrap_or(f64::INFINITY),
+    );
+    if lo.is_nan() || hi.is_nan() || lo >= hi {
+        return Err(value_error(format!(
+            "f_min {lo} / f_max {hi}: need f_min < f_max"
+        )));
+    }
+    if max_iterations == 0 || max_iterations > 10_000 {
+        return Err(value_error(format!(
+            "max_iterations {max_iterations}: need 1 to 10000 vector-fitting iterations"
+        )));
+    }
+    let opts = SdofIdOptions {
+        band: (TAU * lo, TAU * hi),
+        poles,
+        input: match input.to_ascii_lowercase().as_str() {
+            "force" => InputKind::Force,
+            "acceleration" => InputKind::Acceleration,
+            _ => {
+                return Err(value_error(format!(
+                    "input {input:?} is not allowed: use \"force\" or \"acceleration\""
+                )))
+            }
+        },
+        output: match output.to_ascii_lowercase().as_str() {
+            "displacement" => OutputKind::Displacement,
+            "velocity" => OutputKind::Velocity,
+            "acceleration" => OutputKind::Acceleration,
+            _ => {
+                return Err(value_error(format!(
+                    "output {output:?} is not allowed: use \"displacement\", \"velocity\" or \"acceleration\""
+                )))
+            }
+        },
+        mass,
+        mode,
+        constant,
+        proportional,
+        weighting: match weight.to_ascii_lowercase().as_str() {
+            "uniform" => FrfWeighting::Uniform,
+            "inverse" => FrfWeighting::Inverse,
+            _ => {
+                return Err(value_error(format!(
+                    "weight {weight:?} is not allowed: use \"uniform\" or \"inverse\""
+                )))
+            }
+        },
+        max_iterations,
+    };
+    if let Some(m) = mass {
+        if !(m.is_finite() && m > 0.0) {
+            return Err(value_error(format!("mass {m}: must be finite and > 0 kg")));
+        }
+    }
+    let id = py
+        .detach(|| identify_sdof(&measured, &opts))
+        .map_err(value_error)?;
+    let used: Vec<f64> = id.points.iter().map(|&i| f[i]).collect();
+    to_py(py, &nlsdof_report::linear_id::json(&id, &used))
+}
+
+/// An STFT spectrogram: `times` (s, segment centres), `frequencies` (Hz)
+/// and `magnitude`, a numpy array of shape (len(times), len(frequencies)).
+#[pyclass(frozen, name = "Spectrogram", module = "nlsdof")]
+pub struct Spectrogram {
+    #[pyo3(get)]
+    times: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    frequencies: Py<PyArray1<f64>>,
+    #[pyo3(get)]
+    magnitude: Py<PyAny>,
+    shape: (usize, usize),
+}
+
+#[pymethods]
+impl Spectrogram {
+    fn __repr__(&self) -> String {
+        format!(
+            "Spectrogram({} times x {} frequencies)",
+            self.shape.0, self.shape.1
+        )
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn stft_options(
+    n: usize,
+    fs: f64,
+    segments: usize,
+    overlap: f64,
+    window: &str,
+    periodic: bool,
+    nfft: Option<usize>,
+    detrend: &str,
+    scaling: &str,
+) -> PyResult<StftOptions> {
+    if segments == 0 {
+        return Err(value_error(
+            "segments 0 is not allowed: give S >= 1 (L = floor(N/S))",
+        ));
+    }
+    let mut o = StftOptions::with_segments(n, fs, segments);
+    o.window = match window.to_ascii_lowercase().as_str() {
+        "hamming" => Window::Hamming,
+        "hann" => Window::Hann,
+        "blackman" => Window::Blackman,
+        "rectangular" => Window::Rectangular,
+        _ => {
+            return Err(value_error(format!(
+                "window {window:?} is not allowed: use hamming, hann, blackman or rectangular"
+            )))
+        }
+    };
+    o.symmetry = if periodic {
+        Symmetry::Periodic
+    } else {
+        Symmetry::Symmetric
+    };
+    o.overlap = overlap;
+    o.nfft = nfft;
+    o.detrend = match detrend.to_ascii_lowercase().as_str() {
+        "none" => Detrend::None,
+        "constant" => Detrend::Constant,
+        _ => {
+            return Err(value_error(format!(
+                "detrend {detrend:?} is not allowed: use \"none\" or \"constant\""
+            )))
+        }
+    };
+    o.scaling = match scaling.to_ascii_lowercase().as_str() {
+        "amplitude" => Scaling::Amplitude,
+        "psd" => Scaling::Psd,
+        _ => {
+            return Err(value_error(format!(
+                "scaling {scaling:?} is not allowed: use \"amplitude\" or \"psd\""
+            )))
+        }
+    };
+    Ok(o)
+}
+
+/// The STFT spectrogram of `x` sampled at `fs` Hz (as `nlsdof
+/// spectrogram`): segments of L = floor(N / `segments`) samples with
+/// `overlap` (fraction of L), a symmetric Hamming window by default (the
+/// paper's), `scaling` "amplitude" (a sine of amplitude A on a bin reads A)
+/// or "psd"; restricted to [`f_min`, `f_max`] Hz when given.
+#[pyfunction]
+#[pyo3(signature = (x, fs, segments=15, overlap=0.5, window="hamming", periodic=false, nfft=None, detrend="none", scaling="amplitude", f_min=None, f_max=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn spectrogram<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    fs: f64,
+    segments: usize,
+    overlap: f64,
+    window: &str,
+    periodic: bool,
+    nfft: Option<usize>,
+    detrend: &str,
+    scaling: &str,
+    f_min: Option<f64>,
+    f_max: Option<f64>,
+) -> PyResult<Spectrogram> {
+    let a = f64_array(x, "x")?;
+    let x = values(&a);
+    let stft = stft_options(
+        x.len(),
+        fs,
+        segments,
+        overlap,
+        window,
+        periodic,
+        nfft,
+        detrend,
+        scaling,
+    )?;
+    let opts = ComparisonOptions {
+        stft,
+        band: (f_min, f_max),
+        time_offset: 0.0,
+        floor_fraction: 0.01,
+    };
+    let cmp = py
+        .detach(|| compare_records(&x, None, &opts))
+        .map_err(value_error)?;
+    let s = cmp.measured;
+    let (nt, nf) = (s.n_time, s.n_freq);
+    let magnitude = PyArray1::from_vec(py, s.magnitude).reshape([nt, nf])?;
+    Ok(Spectrogram {
+        times: PyArray1::from_vec(py, s.times).unbind(),
+        frequencies: PyArray1::from_vec(py, s.frequencies).unbind(),
+        magnitude: magnitude.into_any().unbind(),
+        shape: (nt, nf),
+    })
+}
+
+/// Compares the spectrograms of `measured` and `model` (same length and
+/// sampling `fs` Hz) by the paper's Eq 33, `max |s_exp - s_num| / s_exp`
+/// in %, and its robust variant over the bins with `s_exp >= floor x max`;
+/// returns the `compare` block of `nlsdof spectrogram --compare --json`.
+#[pyfunction]
+#[pyo3(signature = (measured, model, fs, segments=15, overlap=0.5, window="hamming", periodic=false, nfft=None, detrend="none", scaling="amplitude", f_min=None, f_max=None, floor=0.01))]
+#[allow(clippy::too_many_arguments)]
+pub fn compare_spectrograms<'py>(
+    py: Python<'py>,
+    measured: &Bound<'py, PyAny>,
+    model: &Bound<'py, PyAny>,
+    fs: f64,
+    segments: usize,
+    overlap: f64,
+    window: &str,
+    periodic: bool,
+    nfft: Option<usize>,
+    detrend: &str,
+    scaling: &str,
+    f_min: Option<f64>,
+    f_max: Option<f64>,
+    floor: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let a = f64_array(measured, "measured")?;
+    let b = f64_array(model, "model")?;
+    let (x, y) = (values(&a), values(&b));
+    if x.len() != y.len() {
+        return Err(value_error(format!(
+            "measured has {} samples but model has {}: the comparison needs records of the same length",
+            x.len(),
+            y.len()
+        )));
+    }
+    if !(0.0..=1.0).contains(&floor) {
+        return Err(value_error(format!(
+            "floor {floor} must be a fraction in [0, 1] of the measured maximum"
+        )));
+    }
+    let stft = stft_options(
+        x.len(),
+        fs,
+        segments,
+        overlap,
+        window,
+        periodic,
+        nfft,
+        detrend,
+        scaling,
+    )?;
+    let layout = stft.layout(x.len()).map_err(value_error)?;
+    let opts = ComparisonOptions {
+        stft,
+        band: (f_min, f_max),
+        time_offset: 0.0,
+        floor_fraction: floor,
+    };
+    let cmp = py
+        .detach(|| compare_records(&x, Some(&y), &opts))
+        .map_err(value_error)?;
+    let run = nlsdof_report::spectrogram::SpectrogramRun {
+        label: "measured",
+        input: "measured",
+        column: "measured",
+        compare: Some(("model", "model")),
+        fs,
+        t0: 0.0,
+        samples: x.len(),
+        options: &opts.stft,
+        layout: &layout,
+        measured: &cmp.measured,
+        difference: cmp.difference.as_ref(),
+        floor,
+    };
+    let doc = nlsdof_report::spectrogram::json(&run, serde_json::Value::Null, (0.0, 0.0, 0.0));
+    to_py(py, &doc["compare"])
+}

@@ -12,7 +12,7 @@ use nlsdof::identification::{Parameter, Record};
 use nlsdof_io::stepped_sine_data::{self as data_io, AmplitudeKind, Columns, ReadOptions, Runs};
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyMapping};
+use pyo3::types::{PyDict, PyList};
 use pyo3::PyTypeInfo;
 use std::collections::HashMap;
 use std::f64::consts::TAU;
@@ -165,17 +165,17 @@ fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<Dataset> {
         return Ok(d.get().inner.clone());
     }
     if let Ok(p) = obj.extract::<PathBuf>() {
-        if !obj.is_instance_of::<PyMapping>() {
-            let inner = data_io::read_csv(&p, &ReadOptions::default()).map_err(value_error)?;
-            return Ok(inner);
-        }
+        let inner = data_io::read_csv(&p, &ReadOptions::default()).map_err(value_error)?;
+        return Ok(inner);
     }
-    let map = obj.cast::<PyMapping>().map_err(|_| {
-        value_error("data must be SteppedSineData, a CSV path, or a mapping of columns (level, gamma, f_hz, amplitude[, phase_deg, sweep, weight])")
-    })?;
+    // a dict, a pandas DataFrame, or anything with `name in obj` and `obj[name]`
+    let columns = obj.hasattr("__contains__")? && obj.hasattr("__getitem__")?;
+    if !columns || obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(value_error("data must be SteppedSineData, a CSV path, or a mapping of columns (level, gamma, f_hz, amplitude[, phase_deg, sweep, weight]) such as a dict or a pandas DataFrame"));
+    }
     let get = |name: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
-        if map.contains(name)? {
-            Ok(Some(map.get_item(name)?))
+        if obj.contains(name)? {
+            Ok(Some(obj.get_item(name)?))
         } else {
             Ok(None)
         }
@@ -416,30 +416,18 @@ fn phase_choice(phase: Option<&Bound<'_, PyAny>>) -> PyResult<PhaseChoice> {
             (d, o, 0.0)
         }
     };
-    let sign = match dir.to_ascii_lowercase().as_str() {
-        "lag" => 1.0,
-        "lead" => -1.0,
+    let lag = match dir.to_ascii_lowercase().as_str() {
+        "lag" => true,
+        "lead" => false,
         _ => {
             return Err(value_error(format!(
                 "phase convention {dir:?}: use \"lag\" or \"lead\""
             )))
         }
     };
-    if !(offset.is_finite() && offset.abs() <= 360.0) {
-        return Err(value_error(format!(
-            "phase offset {offset} deg: must be finite, within [-360, 360] degrees"
-        )));
-    }
-    if !(delay.is_finite() && delay.abs() < 1.0) {
-        return Err(value_error(format!(
-            "phase delay {delay} s: must be finite, |delay| < 1 s"
-        )));
-    }
-    Ok(PhaseChoice::Known(PhaseConvention {
-        sign,
-        offset: offset.to_radians(),
-        delay,
-    }))
+    PhaseConvention::from_degrees(lag, offset, delay)
+        .map(PhaseChoice::Known)
+        .map_err(|why| value_error(format!("phase: {why}")))
 }
 
 /// The outcome of `fit`: `parameters` (name -> {value, interval, unit,

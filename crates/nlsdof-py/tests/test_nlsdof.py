@@ -199,6 +199,15 @@ def test_fit_equals_cli_bit_for_bit(cli, tmp_path):
     assert "cost (Eq 31)" in res.report()
 
 
+def test_fit_takes_a_pandas_data_frame():
+    pd = pytest.importorskip("pandas")
+    cols = wing_data()
+    frame = pd.DataFrame(cols)
+    a = nlsdof.fit(frame, model="duffing-quadratic", mass=0.26699).to_dict()
+    b = nlsdof.fit(cols, model="duffing-quadratic", mass=0.26699).to_dict()
+    assert a == b
+
+
 def test_fit_recovers_the_wing_from_noise_free_data():
     cols = wing_data(noise=0.0)
     res = nlsdof.fit(cols, model="duffing-quadratic", mass=0.26699)

@@ -102,7 +102,7 @@ pub fn identification_report(
     Ok(s)
 }
 
-/// JSON of the stages of [`identify`] (equation error, landscape,
+/// JSON of the stages of [`nlsdof::identification::identify()`] (equation error, landscape,
 /// phase convention, gain decision, candidates).
 pub fn identification_json(id: &Identification) -> Value {
     let l = &id.landscape;
@@ -134,7 +134,7 @@ pub fn identification_json(id: &Identification) -> Value {
     })
 }
 
-/// Text lines of the stages of [`identify`].
+/// Text lines of the stages of [`nlsdof::identification::identify()`].
 pub fn identification_text(id: &Identification) -> String {
     let mut s = String::new();
     let l = &id.landscape;

@@ -33,17 +33,18 @@ fn c(z: C64) -> serde_json::Value {
     json!([z.re, z.im])
 }
 
+/// α = k/m (1/s²), δ = c/m (1/s), the mass (kg) if known and where it
+/// came from.
+fn linear_part(l: &SdofLinear) -> (f64, f64, Option<f64>, MassSource) {
+    (l.alpha, l.delta, l.mass, l.mass_source)
+}
+
 /// The JSON document of `linear-id --json`: the vector fit (order history,
 /// poles, residues), the SDoF linear part (α = k/m in 1/s², δ = c/m in 1/s,
 /// and m, k, c when the mass is known), the half-power and circle-fit
 /// estimates. `f_hz` are the frequencies (Hz) of the points used.
 pub fn json(id: &SdofIdentification, f_hz: &[f64]) -> Value {
-    let SdofLinear {
-        alpha,
-        delta,
-        mass,
-        mass_source: source,
-    } = id.sdof;
+    let (alpha, delta, mass, source) = linear_part(&id.sdof);
     let fit = id.fit.as_ref().map(|f| {
         json!({
             "pole_pairs": id.modes.len(),
@@ -99,12 +100,7 @@ pub fn json(id: &SdofIdentification, f_hz: &[f64]) -> Value {
 
 /// The text report of `linear-id`; `source` names the FRF file.
 pub fn text(id: &SdofIdentification, f_hz: &[f64], source_file: &str) -> String {
-    let SdofLinear {
-        alpha,
-        delta,
-        mass,
-        mass_source: source,
-    } = id.sdof;
+    let (alpha, delta, mass, source) = linear_part(&id.sdof);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -249,12 +245,7 @@ pub fn text(id: &SdofIdentification, f_hz: &[f64], source_file: &str) -> String 
 /// The model file of the identified linear part (TOML with a header that
 /// says where the mass came from); `source_file` names the FRF file.
 pub fn model_file_text(id: &SdofIdentification, source_file: &str) -> Result<String, ReportError> {
-    let SdofLinear {
-        alpha,
-        delta,
-        mass,
-        mass_source: source,
-    } = id.sdof;
+    let (alpha, delta, mass, source) = linear_part(&id.sdof);
     let m = mass.unwrap_or(1.0);
     let model = Model::linear(m, m * alpha, m * delta)?;
     let mut s = format!(

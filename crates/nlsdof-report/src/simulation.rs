@@ -34,7 +34,7 @@ pub struct SimulationRun<'a> {
 
 /// `samples_per_step` as an integer when it is one (as the JSON always had).
 fn per_step(v: f64) -> Value {
-    if v.fract() == 0.0 && v >= 0.0 && v < 1e15 {
+    if v.fract() == 0.0 && (0.0..1e15).contains(&v) {
         json!(v as u64)
     } else {
         json!(v)

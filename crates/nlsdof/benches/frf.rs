@@ -39,11 +39,26 @@ fn bench(c: &mut Criterion) {
     let omegas: Vec<f64> = (0..200)
         .map(|i| 2.0 * PI * (5.2 + 0.4 * i as f64 / 199.0))
         .collect();
-    c.bench_function(
-        "frf wing 5x200 sweep up, levels in parallel (sweep_levels)",
-        |b| {
+    // sweep_levels: the sweeps in parallel; level_responses: the same with
+    // each level's phase-quadrature point, what the Python
+    // `Model.sweep(gamma=[5 levels], f_hz=200 points)` runs (the reference
+    // of its call-overhead figure)
+    type Levels =
+        fn(&Model, &[f64], &[f64], SweepDirection, Formulation) -> Result<usize, SolveError>;
+    let runs: [(&str, Levels); 2] = [
+        (
+            "frf wing 5x200 sweep up, levels in parallel (sweep_levels)",
+            |m, g, w, d, f| sweep_levels(m, g, w, d, f).map(|v| v.len()),
+        ),
+        (
+            "frf wing 5x200 level_responses (the Python sweep's computation)",
+            |m, g, w, d, f| level_responses(m, g, w, d, f).map(|v| v.len()),
+        ),
+    ];
+    for (name, run) in runs {
+        c.bench_function(name, |b| {
             b.iter(|| {
-                sweep_levels(
+                run(
                     black_box(&wing),
                     &wing_levels,
                     &omegas,
@@ -52,25 +67,8 @@ fn bench(c: &mut Criterion) {
                 )
                 .unwrap()
             })
-        },
-    );
-    // what the Python `Model.sweep(gamma=[5 levels], f_hz=200 points)`
-    // runs: the reference of its call-overhead figure
-    c.bench_function(
-        "frf wing 5x200 level_responses (the Python sweep's computation)",
-        |b| {
-            b.iter(|| {
-                level_responses(
-                    black_box(&wing),
-                    &wing_levels,
-                    &omegas,
-                    SweepDirection::Up,
-                    Formulation::HarmonicBalance,
-                )
-                .unwrap()
-            })
-        },
-    );
+        });
+    }
     let duff = duffing();
     let duff_levels = [0.25, 0.5, 1.0, 1.5, 2.0];
     c.bench_function("frf strong duffing 5x200 sweep up (jumps)", |b| {

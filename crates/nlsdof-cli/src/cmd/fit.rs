@@ -317,9 +317,9 @@ pub fn parse_phase_convention(s: &str) -> Result<PhaseConvention, CliError> {
     if parts.len() < 2 || parts.len() > 3 {
         return Err(bad("need 2 or 3 fields"));
     }
-    let sign = match parts[0].to_ascii_lowercase().as_str() {
-        "lag" => 1.0,
-        "lead" => -1.0,
+    let lag = match parts[0].to_ascii_lowercase().as_str() {
+        "lag" => true,
+        "lead" => false,
         _ => return Err(bad("first field must be lag or lead")),
     };
     let offset: f64 = parts[1]
@@ -329,17 +329,7 @@ pub fn parse_phase_convention(s: &str) -> Result<PhaseConvention, CliError> {
         Some(d) => d.parse().map_err(|_| bad("delay is not a number"))?,
         None => 0.0,
     };
-    if !(offset.is_finite() && offset.abs() <= 360.0) {
-        return Err(bad("offset must be finite, within [-360, 360] degrees"));
-    }
-    if !(delay.is_finite() && delay.abs() < 1.0) {
-        return Err(bad("delay must be finite, |delay| < 1 s"));
-    }
-    Ok(PhaseConvention {
-        sign,
-        offset: offset.to_radians(),
-        delay,
-    })
+    PhaseConvention::from_degrees(lag, offset, delay).map_err(|why| bad(&why))
 }
 
 /// The fit plan of the CLI options (`--fix`, `--free`, `--bounds`, sign,

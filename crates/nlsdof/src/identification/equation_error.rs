@@ -94,6 +94,33 @@ impl Default for PhaseConvention {
 }
 
 impl PhaseConvention {
+    /// A convention as a user states it: `lag` (the measured phase grows
+    /// through resonance; `false`: a lead), the offset in degrees (within
+    /// ±360) and the delay in seconds (|τ| < 1). The error says which value
+    /// is out of range.
+    ///
+    /// ```
+    /// use nlsdof::identification::PhaseConvention;
+    /// let velocity = PhaseConvention::from_degrees(true, 90.0, 0.0).unwrap();
+    /// assert!((velocity.offset - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    /// assert!(PhaseConvention::from_degrees(true, 400.0, 0.0).is_err());
+    /// ```
+    pub fn from_degrees(lag: bool, offset_deg: f64, delay_s: f64) -> Result<Self, String> {
+        if !(offset_deg.is_finite() && offset_deg.abs() <= 360.0) {
+            return Err(format!(
+                "offset {offset_deg} must be finite, within [-360, 360] degrees"
+            ));
+        }
+        if !(delay_s.is_finite() && delay_s.abs() < 1.0) {
+            return Err(format!("delay {delay_s} must be finite, |delay| < 1 s"));
+        }
+        Ok(Self {
+            sign: if lag { 1.0 } else { -1.0 },
+            offset: offset_deg.to_radians(),
+            delay: delay_s,
+        })
+    }
+
     /// The model phase lag φ of a measured phase ψ at Ω.
     pub fn lag(&self, psi: f64, omega: f64) -> f64 {
         self.sign * (psi - self.offset - omega * self.delay)

@@ -30,6 +30,7 @@ fn _nlsdof(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::SteadyState>()?;
     m.add_class::<model::Jump>()?;
     m.add_class::<model::Sweep>()?;
+    m.add_class::<model::HarmonicSweep>()?;
     m.add_class::<model::RigSweep>()?;
     m.add_class::<fit::SteppedSineData>()?;
     m.add_class::<fit::FitResult>()?;

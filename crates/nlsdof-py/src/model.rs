@@ -8,7 +8,7 @@ use nlsdof::simulation::{simulate_record, RecordMethod, Sample, State};
 use nlsdof::stepped_sine::{run_sweeps, RigOptions};
 use nlsdof::{level_responses, ForcedResponse};
 use nlsdof_report::steady_state::{sweep_json, SweepRequest};
-use numpy::PyArray1;
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use std::f64::consts::TAU;
 use std::path::PathBuf;
@@ -195,6 +195,112 @@ impl Model {
         } else {
             Ok(out.into_pyobject(py)?.into_any())
         }
+    }
+
+    /// Multi-harmonic balance with `harmonics` harmonics (the constant and
+    /// even terms included; alternating frequency/time forces, analytic
+    /// Jacobian, pseudo-arclength continuation through the folds, Hill
+    /// stability), as `nlsdof frf --harmonics H`: the branch a stepped-sine
+    /// sweep at level `gamma` (m/s^2, zero-to-peak) follows over `f_hz` (Hz).
+    /// With a sequence of levels, one `HarmonicSweep` per level.
+    #[pyo3(signature = (gamma, f_hz, harmonics, direction="up"))]
+    fn harmonic_sweep<'py>(
+        &self,
+        py: Python<'py>,
+        gamma: &Bound<'py, PyAny>,
+        f_hz: &Bound<'py, PyAny>,
+        harmonics: usize,
+        direction: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let dir = crate::convert::direction(direction)?;
+        let (gammas, one) = match gamma.extract::<f64>() {
+            Ok(g) => (vec![g], true),
+            Err(_) => (values(&f64_array(gamma, "gamma")?).into_owned(), false),
+        };
+        let f = f64_array(f_hz, "f_hz")?;
+        let f = values(&f);
+        if f.is_empty() {
+            return Err(value_error("f_hz is empty: give at least one frequency"));
+        }
+        let omegas: Vec<f64> = f.iter().map(|f| TAU * f).collect();
+        let model = &self.inner;
+        let levels = py
+            .detach(|| {
+                nlsdof::multi_harmonic::level_sweeps(model, &gammas, &omegas, dir, harmonics)
+            })
+            .map_err(value_error)?;
+        let mut out: Vec<HarmonicSweep> = levels
+            .into_iter()
+            .map(|level| HarmonicSweep {
+                model: self.inner,
+                level,
+                harmonics,
+                steps: f.len(),
+            })
+            .collect();
+        if one {
+            Ok(Bound::new(py, out.remove(0))?.into_any())
+        } else {
+            Ok(out.into_pyobject(py)?.into_any())
+        }
+    }
+
+    /// How wrong the first-order balance is (`nlsdof hb-error`): the
+    /// resonance peak and the folds over [`f_min`, `f_max`] Hz (default 0.8
+    /// to 2 f_n) at level `gamma` for H = 1, 3, 5, ... up to `h_max`, until
+    /// successive H agree to `tol`; errors relative to the converged H.
+    /// Returns the level's entry of `nlsdof hb-error --json`.
+    #[pyo3(signature = (gamma, f_min=None, f_max=None, tol=1e-6, h_max=63))]
+    fn hb_error<'py>(
+        &self,
+        py: Python<'py>,
+        gamma: f64,
+        f_min: Option<f64>,
+        f_max: Option<f64>,
+        tol: f64,
+        h_max: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        use nlsdof::multi_harmonic::truncation::{truncation_study, HARMONIC_LADDER};
+        let fn_hz = self.inner.omega_n() / TAU;
+        let (f0, f1) = (f_min.unwrap_or(0.8 * fn_hz), f_max.unwrap_or(2.0 * fn_hz));
+        if !(f0.is_finite() && f1.is_finite() && 0.0 < f0 && f0 < f1) {
+            return Err(value_error(format!(
+                "f_min {f0} / f_max {f1}: need 0 < f_min < f_max (Hz)"
+            )));
+        }
+        if h_max == 0 || h_max > 63 {
+            return Err(value_error(format!(
+                "h_max {h_max} is not allowed: need an integer from 1 to 63"
+            )));
+        }
+        let ladder: Vec<usize> = HARMONIC_LADDER
+            .iter()
+            .copied()
+            .filter(|&h| h <= h_max)
+            .collect();
+        let n = self.inner.normalised().map_err(value_error)?;
+        let study = py
+            .detach(|| {
+                truncation_study(
+                    &n,
+                    gamma,
+                    TAU * f0,
+                    TAU * f1,
+                    &ladder,
+                    tol,
+                    nlsdof::multi_harmonic::settings_for(&n),
+                    &nlsdof::multi_harmonic::ContinuationOptions::default(),
+                )
+            })
+            .map_err(value_error)?;
+        let req = nlsdof_report::truncation::StudyRequest {
+            model_name: "",
+            f_min: f0,
+            f_max: f1,
+            tol,
+        };
+        let doc = nlsdof_report::truncation::study_json(&req, &self.inner, &[(gamma, study)]);
+        to_py(py, &doc["levels"][0])
     }
 
     /// Simulates Eq 32 driven by the input acceleration `u` (m/s^2) sampled
@@ -499,6 +605,140 @@ impl RigSweep {
         format!(
             "RigSweep(gamma={:?}, {} steps, {:.1} s simulated)",
             self.gamma, self.n, self.simulated_s
+        )
+    }
+}
+
+/// A multi-harmonic sweep: numpy `f_hz`, `amplitude` (first harmonic, m),
+/// `phase_deg` (first harmonic), `stable` (Hill), `max_abs_x` (m),
+/// `harmonic_amplitudes` (points x (H+1): orders 0..H, m); the `jumps`, the
+/// `folds_hz`, a `warning` when the continuation stopped early, and
+/// `to_dict()` (the level of `nlsdof frf --harmonics H --json`).
+#[pyclass(frozen, name = "HarmonicSweep", module = "nlsdof")]
+pub struct HarmonicSweep {
+    model: nlsdof::Model,
+    level: nlsdof::multi_harmonic::LevelSweep,
+    harmonics: usize,
+    steps: usize,
+}
+
+impl HarmonicSweep {
+    fn column<'py, T: numpy::Element>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&nlsdof::multi_harmonic::sweep::MhbSweepPoint) -> T,
+    ) -> Bound<'py, PyArray1<T>> {
+        PyArray1::from_vec(py, self.level.sweep.points.iter().map(f).collect())
+    }
+}
+
+#[pymethods]
+impl HarmonicSweep {
+    /// Input level, m/s^2 zero-to-peak.
+    #[getter]
+    fn gamma(&self) -> f64 {
+        self.level.gamma
+    }
+    /// Number of harmonics H.
+    #[getter]
+    fn harmonics(&self) -> usize {
+        self.harmonics
+    }
+    /// Frequencies, Hz.
+    #[getter]
+    fn f_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| p.omega / TAU)
+    }
+    /// First-harmonic amplitude, m.
+    #[getter]
+    fn amplitude<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| {
+            nlsdof::multi_harmonic::harmonic_amplitude(&p.coefficients, 1)
+        })
+    }
+    /// First-harmonic phase lag, deg.
+    #[getter]
+    fn phase_deg<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| {
+            nlsdof::multi_harmonic::harmonic_phase(&p.coefficients, 1).to_degrees()
+        })
+    }
+    /// Hill stability of each point.
+    #[getter]
+    fn stable<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.column(py, |p| p.stable)
+    }
+    /// max |x(t)| over a period, m.
+    #[getter]
+    fn max_abs_x<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.column(py, |p| {
+            nlsdof::multi_harmonic::max_abs_displacement(&p.coefficients)
+        })
+    }
+    /// Amplitudes of the harmonics 0..H at every point, m: shape (points, H+1).
+    #[getter]
+    fn harmonic_amplitudes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let h = self.harmonics;
+        let pts = &self.level.sweep.points;
+        let v: Vec<f64> = pts
+            .iter()
+            .flat_map(|p| {
+                (0..=h).map(move |k| nlsdof::multi_harmonic::harmonic_amplitude(&p.coefficients, k))
+            })
+            .collect();
+        Ok(PyArray1::from_vec(py, v)
+            .reshape([pts.len(), h + 1])?
+            .into_any())
+    }
+    /// The jumps (first-harmonic amplitudes before and after).
+    #[getter]
+    fn jumps(&self) -> Vec<Jump> {
+        self.level
+            .sweep
+            .jumps
+            .iter()
+            .map(|j| Jump {
+                f_hz: j.omega / TAU,
+                amplitude_before: j.amplitude_before,
+                amplitude_after: j.amplitude_after,
+            })
+            .collect()
+    }
+    /// Limit points of the branch, Hz.
+    #[getter]
+    fn folds_hz(&self) -> Vec<f64> {
+        self.level.sweep.folds.iter().map(|f| f.0 / TAU).collect()
+    }
+    /// Why the continuation stopped early (the curve is then partial), or None.
+    #[getter]
+    fn warning(&self) -> Option<String> {
+        self.level.sweep.warning.as_ref().map(|w| w.to_string())
+    }
+    /// The level's entry of `nlsdof frf --harmonics H --json`.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let req = nlsdof_report::multi_harmonic::HarmonicSweepRequest {
+            model_name: "",
+            direction: self.level.sweep.direction,
+            steps: self.steps,
+            harmonics: self.harmonics,
+        };
+        let doc = nlsdof_report::multi_harmonic::sweep_json(
+            &req,
+            &self.model,
+            std::slice::from_ref(&self.level),
+        );
+        to_py(py, &doc["levels"][0])
+    }
+    fn __len__(&self) -> usize {
+        self.level.sweep.points.len()
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "HarmonicSweep(gamma={:?}, H={}, {} points, {} jump(s))",
+            self.level.gamma,
+            self.harmonics,
+            self.level.sweep.points.len(),
+            self.level.sweep.jumps.len()
         )
     }
 }

@@ -117,6 +117,50 @@ def test_sweep_equals_cli_bit_for_bit(cli):
     assert len(sweep) == steps
 
 
+DUFFING = EXAMPLES / "duffing-strong.toml"
+
+
+def test_harmonic_sweep_equals_cli_bit_for_bit(cli):
+    f0, f1, steps = 8.0, 16.0, 120
+    doc = json.loads(
+        run_cli(cli, "frf", "--model", DUFFING, "--gamma", 2.0, "--f-min", f0, "--f-max", f1,
+                "--steps", steps, "--harmonics", 3, "--json")
+    )
+    model = nlsdof.Model.from_toml(DUFFING)
+    s = model.harmonic_sweep(gamma=2.0, f_hz=cli_linspace(f0, f1, steps), harmonics=3)
+    assert s.to_dict() == doc["levels"][0]
+    assert s.harmonic_amplitudes.shape == (len(s), 4)
+    assert np.array_equal(s.harmonic_amplitudes[:, 1], s.amplitude)
+    assert np.all(s.max_abs_x >= s.amplitude * (1 - 1e-12))
+    assert s.warning is None and len(s.jumps) == 1
+
+
+def test_one_harmonic_equals_the_exact_first_order_balance():
+    model = nlsdof.Model.from_toml(DUFFING)
+    f = np.linspace(8.0, 16.0, 80)
+    h1 = model.harmonic_sweep(gamma=2.0, f_hz=f, harmonics=1)
+    exact = model.sweep(gamma=2.0, f_hz=f)
+    assert np.allclose(h1.amplitude, exact.amplitude, rtol=1e-12, atol=0.0)
+
+
+def test_hb_error_equals_cli(cli):
+    doc = json.loads(run_cli(cli, "hb-error", "--model", DUFFING, "--gamma", 2.0, "--h-max", 9, "--json"))
+    study = nlsdof.Model.from_toml(DUFFING).hb_error(gamma=2.0, h_max=9)
+    assert study == doc["levels"][0]
+    # the odd ladder until two successive H agree to tol (1e-6)
+    hs = [r["harmonics"] for r in study["rows"]]
+    assert hs == [1, 3, 5, 7, 9][: len(hs)] and study["converged"]
+    assert study["rows"][-1]["change"] <= 1e-6
+
+
+def test_an_undamped_model_is_refused_by_the_harmonic_balance():
+    m = nlsdof.Model(mass=1.0, stiffness=3947.84, damping=0.0, nonlinear_stiffness=(1e6, 2.0))
+    with pytest.raises(ValueError, match="no damping"):
+        m.harmonic_sweep(gamma=1.0, f_hz=[9.0, 10.0, 11.0], harmonics=3)
+    with pytest.raises(ValueError, match="no damping"):
+        m.hb_error(gamma=1.0)
+
+
 def write_signal(path, u):
     with open(path, "w") as f:
         f.write("accel\n")

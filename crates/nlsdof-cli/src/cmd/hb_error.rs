@@ -11,9 +11,8 @@ use nlsdof_report::truncation as report;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
-/// Harmonic counts tried, in order (odd first: symmetric power laws excite
-/// odd harmonics; even ones are part of every balance and stay zero there).
-const LADDER: [usize; 12] = [1, 3, 5, 7, 9, 11, 15, 21, 31, 41, 51, 63];
+/// Harmonic counts tried, in order.
+use nlsdof::multi_harmonic::truncation::HARMONIC_LADDER as LADDER;
 
 #[derive(clap::Args)]
 #[command(

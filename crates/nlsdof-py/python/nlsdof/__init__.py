@@ -9,13 +9,14 @@ zero-to-peak; frequencies are in Hz. Equation numbers refer to Civera et al.
 reduced-order models".
 
 Entry points: ``g``, ``Model`` (steady_states, sweep, simulate,
-stepped_sine), ``fit`` with ``read_stepped_sine``/``read_beam_dir``,
+stepped_sine, harmonic_sweep, hb_error), ``fit`` with ``read_stepped_sine``/``read_beam_dir``,
 ``linear_id``, ``spectrogram``, ``compare_spectrograms``. Every error of the
 library is a ``ValueError`` with the same one-line message as the CLI.
 """
 
 from ._nlsdof import (
     FitResult,
+    HarmonicSweep,
     Jump,
     Model,
     RigSweep,
@@ -35,6 +36,7 @@ from ._nlsdof import (
 
 __all__ = [
     "FitResult",
+    "HarmonicSweep",
     "Jump",
     "Model",
     "RigSweep",

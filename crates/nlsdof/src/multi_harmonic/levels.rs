@@ -24,7 +24,8 @@ pub struct LevelSweep {
 
 /// Sweeps `model` with `h` harmonics at each level of `gammas` (m/s²,
 /// zero-to-peak) over `omegas` (rad/s) in `direction`, with
-/// [`settings_for`] the model.
+/// [`settings_for`] the model. A model without any damping is refused
+/// ([`MhbError::Undamped`]): its response at resonance is unbounded.
 pub fn level_sweeps(
     model: &(impl AsNormalised + ?Sized),
     gammas: &[f64],
@@ -33,6 +34,9 @@ pub fn level_sweeps(
     h: usize,
 ) -> Result<Vec<LevelSweep>, MhbError> {
     let n = model.as_normalised()?;
+    if n.delta == 0.0 && n.kappa == 0.0 {
+        return Err(MhbError::Undamped);
+    }
     let mut out = Vec::with_capacity(gammas.len());
     for &gamma in gammas {
         let s = sweep(
@@ -84,4 +88,38 @@ pub fn settings_for(model: &NormalisedModel) -> HarmonicSettings {
         s.regularisation = 1e-2;
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::multi_harmonic::truncation::truncation_study;
+    use crate::Model;
+
+    #[test]
+    fn an_undamped_model_is_refused_before_any_continuation() {
+        let m = Model::linear(1.0, 3947.84, 0.0)
+            .unwrap()
+            .with_stiffness(1e6, 2.0)
+            .unwrap();
+        let w = [50.0, 60.0, 70.0];
+        let e = level_sweeps(&m, &[1.0], &w, SweepDirection::Up, 3).unwrap_err();
+        assert!(matches!(e, MhbError::Undamped), "{e}");
+        let n = m.normalised().unwrap();
+        let e = truncation_study(
+            &m,
+            1.0,
+            50.0,
+            70.0,
+            &[1, 3],
+            1e-6,
+            settings_for(&n),
+            &ContinuationOptions::default(),
+        )
+        .unwrap_err();
+        assert!(matches!(e, MhbError::Undamped), "{e}");
+        // any damping term is enough
+        let damped = m.with_damping(1e-3, 1.0).unwrap();
+        assert!(level_sweeps(&damped, &[1.0], &w, SweepDirection::Up, 3).is_ok());
+    }
 }

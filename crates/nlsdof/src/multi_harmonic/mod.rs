@@ -54,6 +54,10 @@ pub enum MhbError {
     Parameter(#[from] ParameterError),
     #[error(transparent)]
     Solve(#[from] SolveError),
+    /// No damping at all (c = 0 and no c_e term): no forced steady state at
+    /// resonance, every periodic solution only neutrally stable.
+    #[error("the model has no damping (c = 0 and no c_e term): at resonance there is no forced steady state and every periodic solution is only neutrally stable; give c > 0 or a damping term")]
+    Undamped,
     #[error("number of harmonics {value} must be between 1 and {max}")]
     Harmonics { value: usize, max: usize },
     #[error("{name} = {value} is invalid")]

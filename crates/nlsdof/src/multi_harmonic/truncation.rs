@@ -66,7 +66,13 @@ pub fn row_difference(a: &TruncationRow, b: &TruncationRow) -> f64 {
     d
 }
 
+/// The harmonic counts `nlsdof hb-error` (and the Python `hb_error`) try,
+/// in order: odd first, since symmetric power laws excite odd harmonics
+/// (the even ones are part of every balance and stay zero there).
+pub const HARMONIC_LADDER: [usize; 12] = [1, 3, 5, 7, 9, 11, 15, 21, 31, 41, 51, 63];
+
 /// The study for `harmonics` (increasing, each ≥ 1), see the module docs.
+/// A model without any damping is refused ([`MhbError::Undamped`]).
 pub fn truncation_study(
     model: &(impl AsNormalised + ?Sized),
     gamma: f64,
@@ -78,6 +84,9 @@ pub fn truncation_study(
     opts: &ContinuationOptions,
 ) -> Result<TruncationStudy, MhbError> {
     let model = &model.as_normalised()?;
+    if model.delta == 0.0 && model.kappa == 0.0 {
+        return Err(MhbError::Undamped);
+    }
     if !(tol.is_finite() && tol > 0.0) {
         return Err(MhbError::InvalidValue {
             name: "tol",

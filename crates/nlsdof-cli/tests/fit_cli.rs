@@ -495,3 +495,56 @@ fn unconverged_fit_says_so_first() {
     );
     assert!(text.contains("intervals: not shown"), "{text}");
 }
+
+/// `fit --profile`: output-error profile intervals of the free exponent,
+/// around the estimate, on exact Duffing data (the truth ρ = 2 inside).
+#[test]
+fn profile_option_reports_output_error_intervals() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, _) = write_csv(dir.path());
+    let o = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args([
+            "fit",
+            csv.to_str().unwrap(),
+            "--model",
+            "generalised-stiffness",
+            "--profile",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rho = &v["identification"]["profile_oe_ci95"]["rho"];
+    let est = rho["estimate"].as_f64().unwrap();
+    assert!((est - 2.0).abs() < 1e-3, "{est}");
+    let ci = rho["ci95"].as_array().unwrap();
+    // noise-free data: a narrow interval around the truth, where closed
+    let (lo, hi) = (ci[0].as_f64(), ci[1].as_f64());
+    assert!(lo.is_some() || hi.is_some(), "{rho}");
+    if let Some(lo) = lo {
+        assert!(lo <= est && est - lo < 0.1, "{lo}");
+    }
+    if let Some(hi) = hi {
+        assert!(hi >= est && hi - est < 0.1, "{hi}");
+    }
+    assert!(rho["fits"].as_u64().unwrap() >= 2);
+    // the text report names it
+    let t = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args([
+            "fit",
+            csv.to_str().unwrap(),
+            "--model",
+            "generalised-stiffness",
+            "--profile",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&t.stdout);
+    assert!(
+        text.contains("profile 95 % interval (output error) rho"),
+        "{text}"
+    );
+}

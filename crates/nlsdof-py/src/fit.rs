@@ -531,6 +531,38 @@ impl FitResult {
     fn to_toml(&self) -> String {
         self.toml.clone()
     }
+    /// Output-error profile-likelihood 95 % interval of a free exponent
+    /// (`"rho"` or `"eta"`): refits with the exponent held, walked out from
+    /// the optimum in `step`s (default half its linearised standard error)
+    /// until `(P - P*)/sigma^2` crosses chi2_1(0.95) = 3.84. Returns the
+    /// entry of `nlsdof fit --profile --json`: `estimate`, `ci95` (None:
+    /// open), `fits`, `points`.
+    #[pyo3(signature = (parameter="rho", step=None, max_steps=24))]
+    fn profile<'py>(
+        &self,
+        py: Python<'py>,
+        parameter: &str,
+        step: Option<f64>,
+        max_steps: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        use nlsdof::identification::profile::{default_step, output_error_profile};
+        let p = match parameter.to_ascii_lowercase().as_str() {
+            "rho" => Parameter::Rho,
+            "eta" => Parameter::Eta,
+            _ => {
+                return Err(value_error(format!(
+                    "parameter {parameter:?}: only the exponents \"rho\" and \"eta\" are profiled"
+                )))
+            }
+        };
+        let id = &self.id;
+        let step = step.unwrap_or_else(|| default_step(&id.fit, p));
+        let prof = py
+            .detach(|| output_error_profile(&id.data, &id.spec, &id.fit.theta, p, step, max_steps))
+            .map_err(value_error)?;
+        let doc = nlsdof_report::fit::profiles_json(std::slice::from_ref(&prof));
+        to_py(py, &doc[p.info().name])
+    }
     /// The text report of `nlsdof fit`.
     fn report(&self) -> PyResult<String> {
         nlsdof_report::fit::identification_report(&self.id, self.mass).map_err(value_error)

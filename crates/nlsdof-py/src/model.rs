@@ -382,6 +382,9 @@ impl Model {
         let dir = crate::convert::direction(direction)?;
         let f = f64_array(f_hz, "f_hz")?;
         let omegas: Vec<f64> = values(&f).iter().map(|f| TAU * f).collect();
+        if omegas.is_empty() {
+            return Err(value_error("f_hz is empty: give at least one frequency"));
+        }
         let opts = RigOptions {
             samples_per_cycle,
             tolerance,
@@ -389,10 +392,12 @@ impl Model {
             ..RigOptions::default()
         };
         let model = &self.inner;
-        let mut sweeps = py
+        let sweeps = py
             .detach(|| run_sweeps(model, &[gamma], &omegas, &[dir], &opts, &|| {}))
             .map_err(value_error)?;
-        let s = sweeps.remove(0);
+        let Some(s) = sweeps.into_iter().next() else {
+            return Err(value_error("the rig returned no sweep"));
+        };
         let pts = &s.points;
         Ok(RigSweep {
             gamma,

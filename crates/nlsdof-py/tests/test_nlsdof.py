@@ -243,6 +243,20 @@ def test_fit_equals_cli_bit_for_bit(cli, tmp_path):
     assert "cost (Eq 31)" in res.report()
 
 
+def test_profile_equals_cli(cli, tmp_path):
+    cols = wing_data()
+    path = tmp_path / "data.csv"
+    write_data(path, cols)
+    doc = json.loads(run_cli(cli, "fit", path, "--model", "duffing-generalised", "--profile", "--json"))
+    res = nlsdof.fit(path, model="duffing-generalised")
+    prof = res.profile("eta")
+    assert prof == doc["identification"]["profile_oe_ci95"]["eta"]
+    lo, hi = prof["ci95"]
+    assert (lo is None or lo < prof["estimate"]) and (hi is None or prof["estimate"] < hi)
+    with pytest.raises(ValueError, match="rho"):
+        res.profile("rho")  # held at 2 by the duffing-generalised model
+
+
 def test_fit_takes_a_pandas_data_frame():
     pd = pytest.importorskip("pandas")
     cols = wing_data()
@@ -296,6 +310,8 @@ def test_dtypes_and_non_contiguous_arrays_give_the_same_numbers():
         (lambda: nlsdof.Model.from_toml(WING).sweep(gamma=0.5, f_hz=[5.3], direction="sideways"), "sideways"),
         (lambda: nlsdof.Model.from_toml(WING).sweep(gamma=0.5, f_hz=np.ones((2, 2))), "one-dimensional"),
         (lambda: nlsdof.Model.from_toml(WING).sweep(gamma=0.5, f_hz=[]), "empty"),
+        (lambda: nlsdof.Model.from_toml(WING).stepped_sine(gamma=0.5, f_hz=[]), "empty"),
+        (lambda: nlsdof.Model.from_toml(WING).harmonic_sweep(gamma=0.5, f_hz=[5.3, 5.4, 5.5], harmonics=0), "harmonics"),
         (lambda: nlsdof.Model.from_toml(WING).simulate([0.0, 1.0], fs=0.0), "0"),
         (lambda: nlsdof.Model.from_toml(WING).simulate([0.0, float("nan")], fs=10.0), "NaN"),
         (lambda: nlsdof.Model.from_toml(WING).simulate([0.0, 1.0], fs=10.0, method="euler"), "euler"),

@@ -5,6 +5,7 @@
 use crate::ReportError;
 use nlsdof::identification::models::{ALPHA, BETA, DELTA, GAIN};
 use nlsdof::identification::phase_resonance::PrFitResult;
+use nlsdof::identification::profile::OutputErrorProfile;
 use nlsdof::identification::search::{IntegerPair, SignTrial};
 use nlsdof::identification::uncertainty::Uncertainty;
 use nlsdof::identification::{
@@ -100,6 +101,41 @@ pub fn identification_report(
     s.push('\n');
     s.push_str(&identification_text(id));
     Ok(s)
+}
+
+/// JSON of output-error profile intervals (`fit --profile`): name ->
+/// {estimate, ci95 [lower, upper] (null: open), fits, points [[value,
+/// statistic], ...]}.
+pub fn profiles_json(profiles: &[OutputErrorProfile]) -> Value {
+    let mut m = serde_json::Map::new();
+    for p in profiles {
+        m.insert(
+            p.parameter.info().name.to_string(),
+            json!({"estimate": p.estimate, "ci95": [p.lower, p.upper], "fits": p.fits,
+                   "points": p.points.iter().map(|&(v, s)| [v, s]).collect::<Vec<_>>(),
+                   "note": "(P - P*)/sigma^2 <= 3.84, P the output-error objective with the exponent held; null = open (bound or step limit)"}),
+        );
+    }
+    Value::Object(m)
+}
+
+/// Text lines of output-error profile intervals (`fit --profile`).
+pub fn profiles_text(profiles: &[OutputErrorProfile]) -> String {
+    let mut s = String::new();
+    let f = |v: Option<f64>| v.map_or("open".to_string(), |v| format!("{v:.4}"));
+    for p in profiles {
+        writeln!(
+            s,
+            "profile 95 % interval (output error) {}: [{}, {}] around {:.4} ({} local fits)",
+            p.parameter.info().name,
+            f(p.lower),
+            f(p.upper),
+            p.estimate,
+            p.fits
+        )
+        .ok();
+    }
+    s
 }
 
 /// JSON of the stages of [`nlsdof::identification::identify()`] (equation error, landscape,

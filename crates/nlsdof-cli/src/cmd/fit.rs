@@ -4,11 +4,13 @@
 
 use crate::error::CliError;
 use nlsdof::identification::models::BETA;
+use nlsdof::identification::profile::{default_step, output_error_profile, OutputErrorProfile};
 use nlsdof::identification::search::best_integer_fit;
 use nlsdof::identification::{
     fit, identify, Dataset, FitOptions, FitPlan, FitSpec, GainChoice, JumpChoice, ModelKind,
     PhaseChoice, PhaseConvention, SignChoice, Weighting,
 };
+use nlsdof::identification::{Identification, Parameter};
 use nlsdof::SweepDirection;
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
 use serde_json::json;
@@ -172,6 +174,12 @@ pub struct Args {
     /// Write the exponent landscape: FILE.json (grid), FILE.svg or FILE.png (heat map).
     #[arg(long, value_name = "FILE")]
     pub landscape: Option<PathBuf>,
+    /// Also give output-error profile-likelihood 95 % intervals of the free
+    /// exponents (rho, eta): refits with the exponent held, walked out from
+    /// the optimum until (P - P*)/sigma^2 crosses chi2_1(0.95) = 3.84.
+    /// Costs a few to a few tens of local fits.
+    #[arg(long)]
+    pub profile: bool,
     /// Landscape grid: N (N x N) or NxM (rho nodes x eta nodes), each 1..=512.
     #[arg(long, value_name = "N[xM]", default_value = "41")]
     pub grid: String,
@@ -471,6 +479,23 @@ pub fn resolve_mass(
     Ok(None)
 }
 
+/// The output-error profile intervals of the free exponents of the final
+/// fit, in steps of half their linearised standard error (0.05 without one).
+fn oe_profiles(id: &Identification) -> Result<Vec<OutputErrorProfile>, CliError> {
+    let mut out = Vec::new();
+    for p in [Parameter::Rho, Parameter::Eta] {
+        let j = p as usize;
+        if id.spec.status[j] != nlsdof::identification::Status::Free {
+            continue;
+        }
+        let step = default_step(&id.fit, p);
+        let prof = output_error_profile(&id.data, &id.spec, &id.fit.theta, p, step, 24)
+            .map_err(|e| CliError::Usage(format!("--profile: {e}")))?;
+        out.push(prof);
+    }
+    Ok(out)
+}
+
 /// The default fit: [`identify`] (equation error, landscape, output error).
 fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Result<(), CliError> {
     let (plan, fix_mass) = plan_from_args(args, kind, sign)?;
@@ -511,11 +536,20 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
     for (p, bytes) in &files {
         nlsdof_io::atomic::write_atomic(p, bytes)?;
     }
+    let profiles = if args.profile {
+        oe_profiles(&id)?
+    } else {
+        Vec::new()
+    };
     if args.json {
-        let v = nlsdof_report::fit::identification_document(&id, mass)?;
+        let mut v = nlsdof_report::fit::identification_document(&id, mass)?;
+        if args.profile {
+            v["identification"]["profile_oe_ci95"] = nlsdof_report::fit::profiles_json(&profiles);
+        }
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
         print!("{}", nlsdof_report::fit::identification_report(&id, mass)?);
+        print!("{}", nlsdof_report::fit::profiles_text(&profiles));
     }
     Ok(())
 }

@@ -31,6 +31,7 @@ pub mod models;
 pub mod objective;
 pub mod parameters;
 pub mod phase_resonance;
+pub mod profile;
 pub mod search;
 pub mod time_domain;
 pub mod uncertainty;

@@ -166,35 +166,21 @@ impl Model {
     ) -> PyResult<Bound<'py, PyAny>> {
         let dir = crate::convert::direction(direction)?;
         let form = crate::convert::formulation(formulation)?;
-        let (gammas, one) = match gamma.extract::<f64>() {
-            Ok(g) => (vec![g], true),
-            Err(_) => (values(&f64_array(gamma, "gamma")?).into_owned(), false),
-        };
-        let f = f64_array(f_hz, "f_hz")?;
-        let f = values(&f);
-        if f.is_empty() {
-            return Err(value_error("f_hz is empty: give at least one frequency"));
-        }
-        let omegas: Vec<f64> = f.iter().map(|f| TAU * f).collect();
+        let req = SweepArgs::new(gamma, f_hz)?;
         let model = &self.inner;
         let levels = py
-            .detach(|| level_responses(model, &gammas, &omegas, dir, form))
+            .detach(|| level_responses(model, &req.gammas, &req.omegas, dir, form))
             .map_err(value_error)?;
-        let (f_min, f_max, steps) = (f[0], f[f.len() - 1], f.len());
-        let mut out: Vec<Sweep> = levels
+        let out: Vec<Sweep> = levels
             .into_iter()
             .map(|level| Sweep {
                 model: self.inner,
                 level,
                 formulation: form,
-                band: (f_min, f_max, steps),
+                band: req.band,
             })
             .collect();
-        if one {
-            Ok(Bound::new(py, out.remove(0))?.into_any())
-        } else {
-            Ok(out.into_pyobject(py)?.into_any())
-        }
+        req.one_or_list(py, out)
     }
 
     /// Multi-harmonic balance with `harmonics` harmonics (the constant and
@@ -213,36 +199,29 @@ impl Model {
         direction: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let dir = crate::convert::direction(direction)?;
-        let (gammas, one) = match gamma.extract::<f64>() {
-            Ok(g) => (vec![g], true),
-            Err(_) => (values(&f64_array(gamma, "gamma")?).into_owned(), false),
-        };
-        let f = f64_array(f_hz, "f_hz")?;
-        let f = values(&f);
-        if f.is_empty() {
-            return Err(value_error("f_hz is empty: give at least one frequency"));
-        }
-        let omegas: Vec<f64> = f.iter().map(|f| TAU * f).collect();
+        let req = SweepArgs::new(gamma, f_hz)?;
         let model = &self.inner;
         let levels = py
             .detach(|| {
-                nlsdof::multi_harmonic::level_sweeps(model, &gammas, &omegas, dir, harmonics)
+                nlsdof::multi_harmonic::level_sweeps(
+                    model,
+                    &req.gammas,
+                    &req.omegas,
+                    dir,
+                    harmonics,
+                )
             })
             .map_err(value_error)?;
-        let mut out: Vec<HarmonicSweep> = levels
+        let out: Vec<HarmonicSweep> = levels
             .into_iter()
             .map(|level| HarmonicSweep {
                 model: self.inner,
                 level,
                 harmonics,
-                steps: f.len(),
+                steps: req.band.2,
             })
             .collect();
-        if one {
-            Ok(Bound::new(py, out.remove(0))?.into_any())
-        } else {
-            Ok(out.into_pyobject(py)?.into_any())
-        }
+        req.one_or_list(py, out)
     }
 
     /// How wrong the first-order balance is (`nlsdof hb-error`): the
@@ -419,6 +398,64 @@ impl Model {
     }
 }
 
+/// The levels and frequencies of a sweep call: `gamma` a number (one
+/// result) or a sequence (a list of results), `f_hz` in Hz.
+struct SweepArgs {
+    gammas: Vec<f64>,
+    one: bool,
+    omegas: Vec<f64>,
+    /// f_min, f_max (Hz), steps.
+    band: (f64, f64, usize),
+}
+
+impl SweepArgs {
+    fn new(gamma: &Bound<'_, PyAny>, f_hz: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (gammas, one) = match gamma.extract::<f64>() {
+            Ok(g) => (vec![g], true),
+            Err(_) => (values(&f64_array(gamma, "gamma")?).into_owned(), false),
+        };
+        let f = f64_array(f_hz, "f_hz")?;
+        let f = values(&f);
+        if f.is_empty() {
+            return Err(value_error("f_hz is empty: give at least one frequency"));
+        }
+        Ok(Self {
+            gammas,
+            one,
+            omegas: f.iter().map(|f| TAU * f).collect(),
+            band: (f[0], f[f.len() - 1], f.len()),
+        })
+    }
+
+    /// One object for one level, else the list.
+    fn one_or_list<'py, T>(&self, py: Python<'py>, out: Vec<T>) -> PyResult<Bound<'py, PyAny>>
+    where
+        T: pyo3::PyClass + Into<pyo3::PyClassInitializer<T>>,
+    {
+        let mut items = Vec::with_capacity(out.len());
+        for t in out {
+            items.push(Bound::new(py, t)?.into_any());
+        }
+        if self.one && items.len() == 1 {
+            Ok(items.remove(0))
+        } else {
+            Ok(pyo3::types::PyList::new(py, items)?.into_any())
+        }
+    }
+}
+
+/// The jumps of a sweep for Python (frequencies in Hz).
+fn jumps_of(jumps: &[nlsdof::Jump]) -> Vec<Jump> {
+    jumps
+        .iter()
+        .map(|j| Jump {
+            f_hz: j.omega / TAU,
+            amplitude_before: j.amplitude_before,
+            amplitude_after: j.amplitude_after,
+        })
+        .collect()
+}
+
 /// One steady state: amplitude (m, zero-to-peak), phase lag of x behind
 /// the input (deg), and whether it is stable.
 #[pyclass(frozen, name = "SteadyState", module = "nlsdof")]
@@ -523,16 +560,7 @@ impl Sweep {
     /// The jumps of the sweep (list of `Jump`).
     #[getter]
     fn jumps(&self) -> Vec<Jump> {
-        self.level
-            .sweep
-            .jumps
-            .iter()
-            .map(|j| Jump {
-                f_hz: j.omega / TAU,
-                amplitude_before: j.amplitude_before,
-                amplitude_after: j.amplitude_after,
-            })
-            .collect()
+        jumps_of(&self.level.sweep.jumps)
     }
     /// Fold (limit-point) frequencies in the band, Hz.
     #[getter]
@@ -698,16 +726,7 @@ impl HarmonicSweep {
     /// The jumps (first-harmonic amplitudes before and after).
     #[getter]
     fn jumps(&self) -> Vec<Jump> {
-        self.level
-            .sweep
-            .jumps
-            .iter()
-            .map(|j| Jump {
-                f_hz: j.omega / TAU,
-                amplitude_before: j.amplitude_before,
-                amplitude_after: j.amplitude_after,
-            })
-            .collect()
+        jumps_of(&self.level.sweep.jumps)
     }
     /// Limit points of the branch, Hz.
     #[getter]

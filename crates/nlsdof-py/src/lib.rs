@@ -12,6 +12,7 @@ mod convert;
 mod fit;
 mod model;
 mod signal;
+mod time;
 
 use pyo3::prelude::*;
 
@@ -41,6 +42,8 @@ fn _nlsdof(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(signal::linear_id, m)?)?;
     m.add_function(wrap_pyfunction!(signal::spectrogram, m)?)?;
     m.add_function(wrap_pyfunction!(signal::compare_spectrograms, m)?)?;
+    m.add_function(wrap_pyfunction!(time::decay, m)?)?;
+    m.add_function(wrap_pyfunction!(time::fit_time, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

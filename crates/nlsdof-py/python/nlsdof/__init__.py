@@ -10,7 +10,8 @@ reduced-order models".
 
 Entry points: ``g``, ``Model`` (steady_states, sweep, simulate,
 stepped_sine, harmonic_sweep, hb_error), ``fit`` with ``read_stepped_sine``/``read_beam_dir``,
-``linear_id``, ``spectrogram``, ``compare_spectrograms``. Every error of the
+``linear_id``, ``spectrogram``, ``compare_spectrograms``, ``decay``,
+``fit_time``. Every error of the
 library is a ``ValueError`` with the same one-line message as the CLI.
 """
 
@@ -26,7 +27,9 @@ from ._nlsdof import (
     Sweep,
     __version__,
     compare_spectrograms,
+    decay,
     fit,
+    fit_time,
     g,
     linear_id,
     read_beam_dir,
@@ -46,7 +49,9 @@ __all__ = [
     "Sweep",
     "__version__",
     "compare_spectrograms",
+    "decay",
     "fit",
+    "fit_time",
     "g",
     "linear_id",
     "read_beam_dir",

@@ -1,0 +1,139 @@
+//! Time-domain identification: free decay (Hilbert backbone, damping
+//! curve, averaged power-law fit) and the output-error fit of Eq 32 to a
+//! recorded input and output, as `nlsdof decay` and `nlsdof fit-time`.
+
+use crate::arrays::{f64_array, values};
+use crate::convert::{to_py, value_error};
+use nlsdof::identification::decay::{analyse, DecayOptions};
+use nlsdof::identification::time_domain::{
+    check_ranges, fit_time_domain, predict, Prediction, SampleRange, TimeFitOptions, TimeRecord,
+};
+use nlsdof::identification::ModelKind;
+use pyo3::prelude::*;
+use std::time::Instant;
+
+/// Free-decay identification of the record `x` sampled at `fs` Hz (as
+/// `nlsdof decay --json`): Hilbert envelope and instantaneous frequency,
+/// the backbone f(a) and the decay rate against amplitude in `bins` bins,
+/// the averaged power-law fits of stiffness and damping with 95 %
+/// intervals, and the envelope error of the fitted model's free decay.
+/// `t_start` (s from the first sample) and `band` (Hz, Hz) default to what
+/// the record shows. Returns the document (dict).
+#[pyfunction]
+#[pyo3(signature = (x, fs, t_start=None, band=None, bins=30))]
+pub fn decay<'py>(
+    py: Python<'py>,
+    x: &Bound<'py, PyAny>,
+    fs: f64,
+    t_start: Option<f64>,
+    band: Option<(f64, f64)>,
+    bins: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    if bins < 4 {
+        return Err(value_error(format!("bins {bins}: give at least 4")));
+    }
+    let t0 = Instant::now();
+    let a = f64_array(x, "x")?;
+    let x = values(&a);
+    let opts = DecayOptions {
+        t_start,
+        band,
+        bins,
+    };
+    let t_an = Instant::now();
+    let r = py.detach(|| analyse(&x, fs, &opts)).map_err(value_error)?;
+    let analyse_s = t_an.elapsed().as_secs_f64();
+    let rec = nlsdof_report::decay::DecayRecord {
+        input: "",
+        column: "x",
+        fs,
+        t0: 0.0,
+    };
+    let doc = nlsdof_report::decay::decay_json(&rec, &r, analyse_s, t0.elapsed().as_secs_f64());
+    to_py(py, &doc)
+}
+
+/// Output-error fit of the power-law ODE (Eq 32) to the input `u`
+/// (m/s^2) and output `y` (m) sampled at `fs` Hz, on the half-open sample
+/// range `fit_range` (default: all), with exact RK4 sensitivities and an
+/// equation-error start (as `nlsdof fit-time --json`). Each of `tests`
+/// (ranges) is predicted from its first samples. `model`: as `fit`, without
+/// coulomb. Returns the document (dict): parameters, intervals, RMS errors.
+#[pyfunction]
+#[pyo3(signature = (u, y, fs, model="duffing", fit_range=None, tests=None, starts=1, seed=1, max_iterations=400))]
+#[allow(clippy::too_many_arguments)]
+pub fn fit_time<'py>(
+    py: Python<'py>,
+    u: &Bound<'py, PyAny>,
+    y: &Bound<'py, PyAny>,
+    fs: f64,
+    model: &str,
+    fit_range: Option<(usize, usize)>,
+    tests: Option<Vec<(usize, usize)>>,
+    starts: usize,
+    seed: u64,
+    max_iterations: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let t0 = Instant::now();
+    let kind = ModelKind::parse(model)
+        .filter(|k| *k != ModelKind::Coulomb)
+        .ok_or_else(|| {
+            value_error(format!(
+                "model {model:?} is not allowed: linear, duffing, generalised, quadratic, duffing-quadratic, duffing-generalised, generalised-damping or generalised-stiffness (coulomb: the sensitivity equations are singular at v = 0)"
+            ))
+        })?;
+    if starts == 0 || max_iterations == 0 {
+        return Err(value_error("starts and max_iterations must be at least 1"));
+    }
+    let (ua, ya) = (f64_array(u, "u")?, f64_array(y, "y")?);
+    let (u, y) = (values(&ua), values(&ya));
+    let rec = TimeRecord::new(&u, &y, fs).map_err(value_error)?;
+    let range = match fit_range {
+        Some((a, b)) => SampleRange::new(a, b),
+        None => SampleRange::new(0, u.len()),
+    };
+    let tests: Vec<SampleRange> = tests
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(a, b)| SampleRange::new(a, b))
+        .collect();
+    if tests.is_empty() {
+        check_ranges(u.len(), range, None).map_err(value_error)?;
+    }
+    for t in &tests {
+        check_ranges(u.len(), range, Some(*t)).map_err(value_error)?;
+    }
+    let mut opts = TimeFitOptions {
+        starts,
+        seed,
+        ..TimeFitOptions::default()
+    };
+    opts.lm.max_iterations = max_iterations;
+    opts.lm.max_evaluations = 3 * max_iterations;
+    let t_fit = Instant::now();
+    let (fit, preds) = py
+        .detach(|| {
+            let fit = fit_time_domain(&rec, range, kind, &opts)?;
+            let tm = fit.model();
+            let preds = tests
+                .iter()
+                .map(|t| predict(&rec, *t, &tm))
+                .collect::<Result<Vec<Prediction>, _>>()?;
+            Ok::<_, nlsdof::identification::time_domain::TimeFitError>((fit, preds))
+        })
+        .map_err(value_error)?;
+    let run = nlsdof_report::time_fit::TimeFitRun {
+        input: "",
+        kind,
+        fs,
+        samples: u.len(),
+        range,
+        fit: &fit,
+        predictions: &preds,
+        fit_s: t_fit.elapsed().as_secs_f64(),
+    };
+    to_py(
+        py,
+        &nlsdof_report::time_fit::json(&run, t0.elapsed().as_secs_f64()),
+    )
+}

@@ -502,18 +502,21 @@ fn unconverged_fit_says_so_first() {
 fn profile_option_reports_output_error_intervals() {
     let dir = tempfile::tempdir().unwrap();
     let (csv, _) = write_csv(dir.path());
-    let o = Command::cargo_bin("nlsdof")
-        .unwrap()
-        .args([
+    let run = |json: bool| {
+        let mut c = Command::cargo_bin("nlsdof").unwrap();
+        c.args([
             "fit",
             csv.to_str().unwrap(),
             "--model",
             "generalised-stiffness",
             "--profile",
-            "--json",
-        ])
-        .output()
-        .unwrap();
+        ]);
+        if json {
+            c.arg("--json");
+        }
+        c.output().unwrap()
+    };
+    let o = run(true);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let rho = &v["identification"]["profile_oe_ci95"]["rho"];
@@ -531,18 +534,7 @@ fn profile_option_reports_output_error_intervals() {
     }
     assert!(rho["fits"].as_u64().unwrap() >= 2);
     // the text report names it
-    let t = Command::cargo_bin("nlsdof")
-        .unwrap()
-        .args([
-            "fit",
-            csv.to_str().unwrap(),
-            "--model",
-            "generalised-stiffness",
-            "--profile",
-        ])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&t.stdout);
+    let text = String::from_utf8_lossy(&run(false).stdout).into_owned();
     assert!(
         text.contains("profile 95 % interval (output error) rho"),
         "{text}"

@@ -375,20 +375,13 @@ pub fn fit(
     let id = py
         .detach(|| identify(&data, &plan, &|_| {}))
         .map_err(value_error)?;
-    let doc = nlsdof_report::fit::identification_document(&id, mass).map_err(value_error)?;
-    let toml = nlsdof_report::fit::model_file_text(&id.fit, mass).map_err(value_error)?;
+    // checked here so that `model` cannot fail later
     let physical = id
         .fit
         .model()
         .to_physical(mass.unwrap_or(1.0))
         .map_err(value_error)?;
-    Ok(FitResult {
-        id,
-        mass,
-        doc,
-        toml,
-        physical,
-    })
+    Ok(FitResult { id, mass, physical })
 }
 
 /// `phase=`: None/"auto", "ignore", or (lag|lead, offset_deg[, delay_s]).
@@ -439,8 +432,6 @@ fn phase_choice(phase: Option<&Bound<'_, PyAny>>) -> PyResult<PhaseChoice> {
 pub struct FitResult {
     id: Identification,
     mass: Option<f64>,
-    doc: serde_json::Value,
-    toml: String,
     physical: nlsdof::Model,
 }
 
@@ -514,7 +505,7 @@ impl FitResult {
     /// "theta"}.
     #[getter]
     fn minima<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_py(py, &self.doc["minima"])
+        to_py(py, &nlsdof_report::fit::minima_json(&self.id.fit.minima))
     }
     /// The fitted physical model for the given mass (1 kg if none).
     #[getter]
@@ -525,11 +516,13 @@ impl FitResult {
     }
     /// The document of `nlsdof fit --json` (same keys and numbers).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_py(py, &self.doc)
+        let doc = nlsdof_report::fit::identification_document(&self.id, self.mass)
+            .map_err(value_error)?;
+        to_py(py, &doc)
     }
     /// The model file of `nlsdof fit --out` (TOML, with its header).
-    fn to_toml(&self) -> String {
-        self.toml.clone()
+    fn to_toml(&self) -> PyResult<String> {
+        nlsdof_report::fit::model_file_text(&self.id.fit, self.mass).map_err(value_error)
     }
     /// Output-error profile-likelihood 95 % interval of a free exponent
     /// (`"rho"` or `"eta"`): refits with the exponent held, walked out from

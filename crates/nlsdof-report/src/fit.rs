@@ -305,6 +305,17 @@ pub fn parameters_json(
     params
 }
 
+/// The distinct local minima of a fit as JSON: cost, starts that found it,
+/// termination, θ.
+pub fn minima_json(minima: &[Minimum]) -> Value {
+    Value::Array(
+        minima
+            .iter()
+            .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
+            .collect(),
+    )
+}
+
 /// The distinct local minima of a multistart (up to 20), one line each
 /// with the free parameters; nothing when there was a single start.
 fn minima_text(s: &mut String, minima: &[Minimum], status: &[Status; N_PARAMS]) {
@@ -370,11 +381,7 @@ pub fn result_json(
             })
         })
         .collect();
-    let minima: Vec<Value> = res
-        .minima
-        .iter()
-        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
-        .collect();
+    let minima = minima_json(&res.minima);
     let stiffness_sign = (res.status[BETA] != Status::Absent).then(|| {
         if res.theta[BETA] < 0.0 {
             "softening"
@@ -618,11 +625,7 @@ pub fn pr_json(res: &PrFitResult, mass: Option<f64>, frequency_weight: f64) -> V
             })
         })
         .collect();
-    let minima: Vec<Value> = res
-        .minima
-        .iter()
-        .map(|m| json!({"cost": m.cost, "count": m.count, "termination": m.termination.name(), "theta": m.theta.to_array()}))
-        .collect();
+    let minima = minima_json(&res.minima);
     json!({
         "data": "phase-resonance",
         "model": res.kind.name(),

@@ -2,9 +2,10 @@
 //! RMS, AIC/BIC and parameters (paper Tables 5–7) and the phase-quadrature
 //! comparison (Table 8).
 
-use super::fit::{parse_model_kind, pq_text, result_json, DataArgs};
+use super::fit::{parse_model_kind, DataArgs};
 use crate::error::CliError;
 use nlsdof::identification::{FitOptions, FitSpec, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof_report::fit::{pq_text, result_json};
 use serde_json::json;
 use std::fmt::Write as _;
 

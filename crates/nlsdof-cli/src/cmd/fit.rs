@@ -17,9 +17,8 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 
 pub use super::progress::progress_bar;
-pub use nlsdof_report::fit::{
-    fit_svg, integer_pairs_json, integer_pairs_text, model_file_text, pq_text, result_json,
-    result_text,
+use nlsdof_report::fit::{
+    fit_svg, integer_pairs_json, integer_pairs_text, model_file_text, result_json, result_text,
 };
 
 /// `--weighting` (see [`Weighting`]).

@@ -3,10 +3,7 @@
 //! at 90° phase per level; `nlsdof::identification::phase_resonance`), and
 //! the `--sign` choice (hardening / softening / auto) shared with sweep fits.
 
-use super::fit::{
-    apply_bounds, apply_fix_free, integer_pairs_json, integer_pairs_text, parse_model_kind,
-    resolve_mass, DataArgs,
-};
+use super::fit::{apply_bounds, apply_fix_free, parse_model_kind, resolve_mass, DataArgs};
 use super::sign::{fit_pr_signed, SignArg};
 use crate::error::CliError;
 use nlsdof::identification::models::GAIN;
@@ -15,7 +12,10 @@ use nlsdof::identification::search::best_integer_fit_phase_resonance;
 use nlsdof::identification::{FitSpec, ModelKind, Sign, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_io::phase_resonance_data::read_csv;
 use nlsdof_io::stepped_sine_data::{AmplitudeKind, ReadOptions};
-use nlsdof_report::fit::{pr_json, pr_table_text, pr_text, sign_trials_json, sign_trials_text};
+use nlsdof_report::fit::{
+    integer_pairs_json, integer_pairs_text, pr_json, pr_table_text, pr_text, sign_trials_json,
+    sign_trials_text,
+};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 

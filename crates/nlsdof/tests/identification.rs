@@ -650,3 +650,92 @@ fn global_search_stages_are_deterministic_across_thread_counts() {
         assert!(rel(r1.theta[j], th[j]) < 1e-8, "{}", PARAM_NAMES[j]);
     }
 }
+
+/// The branch-free output error (`ResponseBranch::Nearest`): data that left
+/// the upper branch early (a down-sweep's lower-branch points, labelled as an
+/// up-sweep) are matched exactly at the truth, where Eq 31's sweep compares
+/// them with the upper branch.
+#[test]
+fn branch_free_output_error_matches_either_branch_at_the_truth() {
+    use nlsdof::identification::objective::evaluate_branch;
+    let th = truth(ModelKind::Generalised);
+    let top = 4.0;
+    let mut data =
+        support::fixtures::hb_sweeps(&th, &[top], (8.0, 14.0), 241, &[SweepDirection::Down], None);
+    let r =
+        ForcedResponse::from_normalised(&th.normalised_model(), top, Formulation::HarmonicBalance)
+            .unwrap();
+    let omegas = data.curves[0].omegas.clone();
+    let up = r.sweep(&omegas, SweepDirection::Up).unwrap();
+    assert!(!up.jumps.is_empty(), "the top level must be bistable");
+    let differ = up
+        .points
+        .iter()
+        .zip(&data.curves[0].amplitudes)
+        .filter(|(p, &a)| (p.amplitude - a).abs() > 0.1 * a)
+        .count();
+    // measured: 15 steps of the 241 lie where the two branches differ
+    assert!(differ >= 5, "{differ} steps lie in the hysteresis range");
+    data.curves[0].direction = SweepDirection::Up;
+    let sum_sq = |b: ResponseBranch| {
+        let e = evaluate_branch(&data, &th, false, None, b).unwrap();
+        e.residuals.iter().map(|r| r * r).sum::<f64>()
+    };
+    let peak = data.curves[0]
+        .amplitudes
+        .iter()
+        .fold(0.0f64, |m, &a| m.max(a));
+    let scale = (peak / top).powi(2);
+    let nearest = sum_sq(ResponseBranch::Nearest);
+    let sweep = sum_sq(ResponseBranch::Sweep);
+    assert!(
+        nearest <= 1e-20 * scale,
+        "nearest-state cost {nearest:e} (scale {scale:e})"
+    );
+    assert!(
+        sweep >= 1e-2 * scale,
+        "Eq 31 cost {sweep:e} should see the other branch"
+    );
+}
+
+/// The branch-free mode's Jacobian (the same implicit derivative, at the
+/// nearest root) against central differences, off the truth.
+#[test]
+fn branch_free_problem_jacobian_matches_finite_differences() {
+    let th = truth(ModelKind::Generalised);
+    let data = synthetic(&th, &[0.2, 0.5], 8.0, 13.0, 25, true);
+    let mut spec = FitSpec::new(ModelKind::Generalised, &data);
+    spec.branch = ResponseBranch::Nearest;
+    let p = Problem::new(&data, &spec).unwrap();
+    let mut rng = Rng(5);
+    for _ in 0..5 {
+        let mut t = th;
+        for v in [ALPHA, DELTA, BETA, KAPPA] {
+            t[v] *= 1.0 + 0.1 * (rng.uniform() - 0.5);
+        }
+        t[RHO] += 0.3 * (rng.uniform() - 0.5);
+        t[ETA] += 0.3 * (rng.uniform() - 0.5);
+        let u = p.u_of(&t);
+        let (r, j) = p.residuals_and_jacobian(&u).unwrap();
+        let n = u.len();
+        for k in 0..n {
+            let h = 1e-6 * (1.0 + u[k].abs());
+            let (mut up, mut um) = (u.clone(), u.clone());
+            up[k] += h;
+            um[k] -= h;
+            let (rp, rm) = (p.residuals(&up).unwrap(), p.residuals(&um).unwrap());
+            let colnorm: f64 = (0..r.len())
+                .map(|i| j[i * n + k].powi(2))
+                .sum::<f64>()
+                .sqrt();
+            for i in 0..r.len() {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                assert!(
+                    (fd - j[i * n + k]).abs() <= 1e-5 * colnorm,
+                    "u[{k}] residual {i}: analytic {} vs fd {fd}",
+                    j[i * n + k]
+                );
+            }
+        }
+    }
+}

@@ -45,7 +45,7 @@ pub use identify::{
 pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};
 pub use models::{ModelKind, N_PARAMS, PARAM_NAMES};
-pub use objective::{FitSpec, Sign, SpecError, Status};
+pub use objective::{FitSpec, ResponseBranch, Sign, SpecError, Status};
 pub use parameters::{Parameter, Parameters};
 pub use uncertainty::Uncertainty;
 

@@ -93,9 +93,32 @@ pub struct FitSpec {
     /// Eq 31). Used on the curves that carry phases, which must then be
     /// displacement phase **lags** in rad (see [`evaluate_with_phase`]).
     pub phase_weight: Option<f64>,
+    /// Which model steady state each measured point is compared with
+    /// (default [`ResponseBranch::Sweep`], Eq 31).
+    pub branch: ResponseBranch,
 }
 
-/// Sign of the nonlinear stiffness coefficient β in a fit.
+/// Which steady state of the model a measured point `(Ω, a)` is compared
+/// with in the output error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ResponseBranch {
+    /// Eq 31 as published: the state the model's own sweep reaches at `Ω`
+    /// (continuation in the measured direction, jumps at the model's folds).
+    /// A model fold on the wrong side of a measured step puts that step on
+    /// the other branch, so the cost is discontinuous in θ wherever a fold
+    /// crosses a measured frequency.
+    #[default]
+    Sweep,
+    /// Branch-free output error: the model's stable steady state at `Ω`
+    /// nearest in `ln a` to the measured amplitude (the amplitude itself
+    /// when it is 0), sticking (`a = 0`) when there is none. Every measured
+    /// point lies on some branch, so at the true θ each is compared with its
+    /// own branch whichever way the sweep went; the cost is continuous except
+    /// where a fold crosses a measured step *and* that step's branch ends.
+    /// [`identify()`](crate::identification::identify()) minimises this first, then Eq 31
+    /// from its optimum.
+    Nearest,
+}
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Sign {
     /// β > 0: the resonance bends to higher frequencies.
@@ -268,6 +291,7 @@ impl FitSpec {
             scales,
             stiffness_sign: Sign::Hardening,
             phase_weight: None,
+            branch: ResponseBranch::Sweep,
         }
     }
 
@@ -616,6 +640,52 @@ pub fn model_amplitudes(data: &Dataset, theta: &Parameters) -> Result<Vec<Vec<f6
         .collect())
 }
 
+/// The model's response at every measured step under `branch`: `(a, φ)`
+/// per step in data order, sticking points `(0, 0)`
+/// ([`ResponseBranch::Sweep`]: [`model_response`]).
+pub fn branch_response(
+    data: &Dataset,
+    theta: &Parameters,
+    branch: ResponseBranch,
+) -> Result<Vec<Vec<(f64, f64)>>, SolveError> {
+    use rayon::prelude::*;
+    if branch == ResponseBranch::Sweep {
+        return model_response(data, theta);
+    }
+    let model = normalised_model(theta);
+    data.curves
+        .par_iter()
+        .map(|c| {
+            let r = ForcedResponse::from_normalised(
+                &model,
+                theta[GAIN] * c.gamma,
+                Formulation::HarmonicBalance,
+            )?;
+            c.omegas
+                .iter()
+                .zip(&c.amplitudes)
+                .map(|(&w, &a_meas)| {
+                    let set = r.steady_states(w)?;
+                    let distance = |a: f64| {
+                        if a_meas > 0.0 {
+                            (a / a_meas).ln().abs()
+                        } else {
+                            a
+                        }
+                    };
+                    let stable = set.roots.iter().any(|s| s.stable);
+                    Ok(set
+                        .roots
+                        .iter()
+                        .filter(|s| s.stable || !stable)
+                        .min_by(|x, y| distance(x.amplitude).total_cmp(&distance(y.amplitude)))
+                        .map_or((0.0, 0.0), |s| (s.amplitude, s.phase)))
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// As [`model_amplitudes`], with the model's phase lag (rad) at each step:
 /// `(a, φ)` per step; sticking points give `(0, 0)`.
 pub fn model_response(
@@ -711,7 +781,20 @@ pub fn evaluate_with_phase(
     jacobian: bool,
     phase_weight: Option<f64>,
 ) -> Result<Evaluation, SolveError> {
-    let resp = model_response(data, theta)?;
+    evaluate_branch(data, theta, jacobian, phase_weight, ResponseBranch::Sweep)
+}
+
+/// [`evaluate_with_phase`] with the model's response taken on `branch`
+/// ([`branch_response`]); the residuals and their derivatives are the same
+/// functions of the compared state `(a, φ)`, whichever root it is.
+pub fn evaluate_branch(
+    data: &Dataset,
+    theta: &Parameters,
+    jacobian: bool,
+    phase_weight: Option<f64>,
+    branch: ResponseBranch,
+) -> Result<Evaluation, SolveError> {
+    let resp = branch_response(data, theta, branch)?;
     Ok(evaluation_of(data, theta, &resp, jacobian, phase_weight))
 }
 
@@ -975,7 +1058,14 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
         let th = self.theta(u);
-        let e = evaluate_with_phase(self.data, &th, false, self.spec.phase_weight).ok()?;
+        let e = evaluate_branch(
+            self.data,
+            &th,
+            false,
+            self.spec.phase_weight,
+            self.spec.branch,
+        )
+        .ok()?;
         e.residuals
             .iter()
             .all(|r| r.is_finite())
@@ -984,7 +1074,14 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.theta(u);
-        let e = evaluate_with_phase(self.data, &th, true, self.spec.phase_weight).ok()?;
+        let e = evaluate_branch(
+            self.data,
+            &th,
+            true,
+            self.spec.phase_weight,
+            self.spec.branch,
+        )
+        .ok()?;
         self.residuals_and_jacobian_of(&th, e)
     }
 }

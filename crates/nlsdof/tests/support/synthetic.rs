@@ -26,6 +26,8 @@ pub struct Case {
     pub phase: Option<(f64, f64)>,
     pub softening: bool,
     pub has_jump: bool,
+    /// Jumps of each noise-free curve (data order).
+    pub clean_jumps: Vec<usize>,
 }
 
 fn log_uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
@@ -62,6 +64,103 @@ fn model_of(th: &Parameters) -> NormalisedModel {
 ///   lead, offset uniform in [−π, π]);
 /// * noise: amplitude × (1 + 0.01 N(0,1)), phase + 0.01 N(0,1) rad.
 pub fn case(seed: u64) -> Case {
+    case_with(seed, &Design::default())
+}
+
+/// The experiment-design knobs of the generator.
+#[derive(Debug, Clone)]
+pub struct Design {
+    /// Frequency steps per sweep.
+    pub steps: usize,
+    /// Range of the top/bottom level ratio.
+    pub ratio: (f64, f64),
+    /// Range of the hardening strength `k_eq/k` at `A`, in units of ζ.
+    pub hardening: (f64, f64),
+    /// Range of the softening strength, in units of ζ.
+    pub softening: (f64, f64),
+    /// Range of `c_eq/c` at `A`.
+    pub damping: (f64, f64),
+    /// Set the strengths at the top level's damped peak amplitude instead of
+    /// the linear one `A`.
+    pub at_response: bool,
+}
+
+impl Default for Design {
+    fn default() -> Self {
+        Self {
+            steps: 120,
+            ratio: (3.0, 6.0),
+            hardening: (3.0, 30.0),
+            softening: (2.0, 8.0),
+            damping: (1.0, 5.0),
+            at_response: false,
+        }
+    }
+}
+
+impl Design {
+    /// The suite's design (issue 10's criterion): the strengths are set at
+    /// the top level's damped peak amplitude (with strong nonlinear damping
+    /// the response never reaches `A`, so a stiffness strength set at `A`
+    /// can leave the measured curves linear), 400 steps per sweep, hardening
+    /// `k_eq/k` in [10ζ, 60ζ], softening in [5ζ, 20ζ], `c_eq/c` in [2, 8].
+    pub fn informative() -> Self {
+        Self {
+            steps: 400,
+            ratio: (3.0, 6.0),
+            hardening: (10.0, 60.0),
+            softening: (5.0, 20.0),
+            damping: (2.0, 8.0),
+            at_response: true,
+        }
+    }
+}
+
+/// Draws of [`informative_case`] before it gives up.
+pub const MAX_DRAWS: u64 = 64;
+
+/// Smallest equivalent stiffness `k_eq(a_max)/k = 1 + g(ρ)β a_max^ρ/α` a
+/// softening case may reach at its largest response amplitude.
+pub const MIN_SOFTENED_STIFFNESS: f64 = 0.1;
+
+/// Whether a softening case stays inside its potential well: the first-order
+/// equivalent stiffness at the largest noise-free amplitude is at least
+/// [`MIN_SOFTENED_STIFFNESS`] of the linear one. Beyond `k_eq ≤ 0` the real
+/// oscillator escapes the well, so first-order HB states there are not
+/// measurable data; the fit's bound `|β_ref| ≤ 0.95 α₀` says the same.
+/// Hardening cases always pass.
+pub fn within_well(c: &Case) -> bool {
+    let t = &c.truth;
+    let a_max = c.clean.iter().flatten().fold(0.0f64, |m, &a| m.max(a));
+    1.0 + g_unchecked(t[RHO]) * t[BETA] * a_max.powf(t[RHO]) / t[ALPHA] >= MIN_SOFTENED_STIFFNESS
+}
+
+/// Normal quantile of the screen of [`informative_case`]: an efficient
+/// estimator is within 0.1 of an exponent with probability ≥ 99 % when
+/// `2.58 σ_CRLB ≤ 0.1`.
+pub const SCREEN_Z: f64 = 2.58;
+
+/// Case `seed` of `design` whose data can pin both exponents to 0.1: the
+/// first of the draws `seed`, `seed + 1_000_000`, `seed + 2_000_000`, …
+/// with `SCREEN_Z σ_CRLB ≤ 0.1` for ρ and η ([`exponent_crlb`], computed
+/// from the truth and the noise level, never from a fit). With 1.96 instead,
+/// a case at the edge of the screen would miss 0.1 one time in 20 from the
+/// noise alone, which a 97 % target cannot absorb. Returns the case and the
+/// number of draws rejected before it (these and the draws that leave their
+/// potential well, [`within_well`]); `None` after [`MAX_DRAWS`].
+pub fn informative_case(seed: u64, design: &Design) -> Option<(Case, u64)> {
+    (0..MAX_DRAWS).find_map(|k| {
+        let c = case_with(seed + 1_000_000 * k, design);
+        if !within_well(&c) {
+            return None;
+        }
+        let (sr, se) = exponent_crlb(&c)?;
+        (SCREEN_Z * sr <= 0.1 && SCREEN_Z * se <= 0.1).then_some((c, k))
+    })
+}
+
+/// [`case`] under another experiment design.
+pub fn case_with(seed: u64, design: &Design) -> Case {
     let mut rng = Rng(0x5EED_0000 + seed.wrapping_mul(0x9E37_79B9));
     for _ in 0..3 {
         rng.next_u64();
@@ -86,7 +185,7 @@ pub fn case(seed: u64) -> Case {
     };
     let softening = rng.next_u64() % 3 == 0;
     let n_levels = 1 + (rng.next_u64() % 6) as usize;
-    let ratio = 3.0 + 3.0 * rng.uniform();
+    let ratio = design.ratio.0 + (design.ratio.1 - design.ratio.0) * rng.uniform();
     let gamma1 = 1.0;
     let gammas: Vec<f64> = (0..n_levels)
         .map(|l| {
@@ -100,18 +199,41 @@ pub fn case(seed: u64) -> Case {
     let gtop = *gammas.last().unwrap();
     let a_lin = gtop / (delta * wn);
     let s_k = if softening {
-        log_uniform(&mut rng, 2.0 * zeta, 8.0 * zeta)
+        log_uniform(
+            &mut rng,
+            design.softening.0 * zeta,
+            design.softening.1 * zeta,
+        )
     } else {
-        log_uniform(&mut rng, 3.0 * zeta, 30.0 * zeta)
+        log_uniform(
+            &mut rng,
+            design.hardening.0 * zeta,
+            design.hardening.1 * zeta,
+        )
     };
     let sign = if softening { -1.0 } else { 1.0 };
-    let beta = sign * s_k * alpha / (g_unchecked(rho) * a_lin.powf(rho));
-    let kappa = if coulomb {
-        let f = 0.1 + 0.4 * rng.uniform();
-        f * gammas[0] * std::f64::consts::PI / 4.0
+    // damping strength first: with `design.at_response` both strengths are
+    // set at the top level's damped peak amplitude instead of `A`
+    let (f_coulomb, c_k) = if coulomb {
+        (0.1 + 0.4 * rng.uniform(), 0.0)
     } else {
-        let c_k = log_uniform(&mut rng, 1.0, 5.0);
-        c_k * delta / (g_unchecked(eta) * (wn * a_lin).powf(eta))
+        (
+            0.0,
+            log_uniform(&mut rng, design.damping.0, design.damping.1),
+        )
+    };
+    let a_ref = if !design.at_response {
+        a_lin
+    } else if coulomb {
+        a_lin * (1.0 - f_coulomb * gammas[0] / gtop)
+    } else {
+        a_lin / (1.0 + c_k)
+    };
+    let beta = sign * s_k * alpha / (g_unchecked(rho) * a_ref.powf(rho));
+    let kappa = if coulomb {
+        f_coulomb * gammas[0] * std::f64::consts::PI / 4.0
+    } else {
+        c_k * delta / (g_unchecked(eta) * (wn * a_ref).powf(eta))
     };
     let truth = Parameters::from([alpha, delta, beta, rho, kappa, eta, 1.0]);
     let model = model_of(&truth);
@@ -120,7 +242,7 @@ pub fn case(seed: u64) -> Case {
     let w_bb = (alpha * (1.0 + kq)).max(0.05 * alpha).sqrt();
     let w_lo = wn.min(w_bb) * (1.0 - 6.0 * zeta);
     let w_hi = wn.max(w_bb) * (1.0 + 6.0 * zeta);
-    let steps = 120;
+    let steps = design.steps;
     let omegas: Vec<f64> = (0..steps)
         .map(|i| w_lo + (w_hi - w_lo) * i as f64 / (steps - 1) as f64)
         .collect();
@@ -139,12 +261,14 @@ pub fn case(seed: u64) -> Case {
     let mut clean = Vec::new();
     let mut clean_lags = Vec::new();
     let mut has_jump = false;
+    let mut clean_jumps = Vec::new();
     for (l, &g) in gammas.iter().enumerate() {
         let r = ForcedResponse::from_normalised(&model, g, Formulation::HarmonicBalance)
             .expect("valid model");
         for &d in &dirs {
             let sw = r.sweep(&omegas, d).expect("sweep");
             has_jump |= !sw.jumps.is_empty();
+            clean_jumps.push(sw.jumps.len());
             let mut pts = sw.points.clone();
             if d == SweepDirection::Down {
                 pts.reverse();
@@ -199,6 +323,7 @@ pub fn case(seed: u64) -> Case {
         phase,
         softening,
         has_jump,
+        clean_jumps,
     }
 }
 

@@ -74,11 +74,12 @@ pub struct Design {
     pub steps: usize,
     /// Range of the top/bottom level ratio.
     pub ratio: (f64, f64),
-    /// Range of the hardening strength `k_eq/k` at `A`, in units of ζ.
+    /// Range of the hardening strength `k_eq/k` at the reference amplitude
+    /// (`A`, or the damped peak with `at_response`), in units of ζ.
     pub hardening: (f64, f64),
     /// Range of the softening strength, in units of ζ.
     pub softening: (f64, f64),
-    /// Range of `c_eq/c` at `A`.
+    /// Range of `c_eq/c` at the reference amplitude.
     pub damping: (f64, f64),
     /// Set the strengths at the top level's damped peak amplitude instead of
     /// the linear one `A`.
@@ -127,7 +128,8 @@ pub const MIN_SOFTENED_STIFFNESS: f64 = 0.1;
 /// equivalent stiffness at the largest noise-free amplitude is at least
 /// [`MIN_SOFTENED_STIFFNESS`] of the linear one. Beyond `k_eq ≤ 0` the real
 /// oscillator escapes the well, so first-order HB states there are not
-/// measurable data; the fit's bound `|β_ref| ≤ 0.95 α₀` says the same.
+/// measurable data (the fit bounds `|β_ref| ≤ 0.95 α₀` for the same reason,
+/// with its data-derived α₀).
 /// Hardening cases always pass.
 pub fn within_well(c: &Case) -> bool {
     let t = &c.truth;

@@ -180,28 +180,7 @@ fn problem_jacobian_in_optimisation_variables_matches_finite_differences() {
         }
         t[RHO] += 0.3 * (rng.uniform() - 0.5);
         t[ETA] += 0.3 * (rng.uniform() - 0.5);
-        let u = p.u_of(&t);
-        let (r, j) = p.residuals_and_jacobian(&u).unwrap();
-        let n = u.len();
-        for k in 0..n {
-            let h = 1e-6 * (1.0 + u[k].abs());
-            let (mut up, mut um) = (u.clone(), u.clone());
-            up[k] += h;
-            um[k] -= h;
-            let (rp, rm) = (p.residuals(&up).unwrap(), p.residuals(&um).unwrap());
-            let colnorm: f64 = (0..r.len())
-                .map(|i| j[i * n + k].powi(2))
-                .sum::<f64>()
-                .sqrt();
-            for i in 0..r.len() {
-                let fd = (rp[i] - rm[i]) / (2.0 * h);
-                assert!(
-                    (fd - j[i * n + k]).abs() <= 1e-5 * colnorm,
-                    "u[{k}] residual {i}: analytic {} vs fd {fd}",
-                    j[i * n + k]
-                );
-            }
-        }
+        support::fixtures::assert_jacobian_matches_fd(&p, &p.u_of(&t));
     }
 }
 
@@ -715,27 +694,6 @@ fn branch_free_problem_jacobian_matches_finite_differences() {
         }
         t[RHO] += 0.3 * (rng.uniform() - 0.5);
         t[ETA] += 0.3 * (rng.uniform() - 0.5);
-        let u = p.u_of(&t);
-        let (r, j) = p.residuals_and_jacobian(&u).unwrap();
-        let n = u.len();
-        for k in 0..n {
-            let h = 1e-6 * (1.0 + u[k].abs());
-            let (mut up, mut um) = (u.clone(), u.clone());
-            up[k] += h;
-            um[k] -= h;
-            let (rp, rm) = (p.residuals(&up).unwrap(), p.residuals(&um).unwrap());
-            let colnorm: f64 = (0..r.len())
-                .map(|i| j[i * n + k].powi(2))
-                .sum::<f64>()
-                .sqrt();
-            for i in 0..r.len() {
-                let fd = (rp[i] - rm[i]) / (2.0 * h);
-                assert!(
-                    (fd - j[i * n + k]).abs() <= 1e-5 * colnorm,
-                    "u[{k}] residual {i}: analytic {} vs fd {fd}",
-                    j[i * n + k]
-                );
-            }
-        }
+        support::fixtures::assert_jacobian_matches_fd(&p, &p.u_of(&t));
     }
 }

@@ -199,7 +199,6 @@ fn strongly_softening_parameter_sets_fail_cleanly() {
 fn softening_jacobian_in_optimisation_variables_matches_finite_differences() {
     // generalised softening model: u_β = ln(−β_ref), the ρ column carries
     // ∂β/∂ρ of the reparametrisation; levels low enough for no jumps
-    use nlsdof::identification::levenberg_marquardt::LeastSquares;
     use nlsdof::identification::objective::Problem;
     let mut th = truth();
     th[RHO] = 2.4;
@@ -223,26 +222,6 @@ fn softening_jacobian_in_optimisation_variables_matches_finite_differences() {
             .map(|v| v + 0.05 * (rng.uniform() - 0.5))
             .collect();
         assert!(p.theta(&u)[BETA] < 0.0);
-        let (r, j) = p.residuals_and_jacobian(&u).unwrap();
-        let n = u.len();
-        for k in 0..n {
-            let h = 1e-6 * (1.0 + u[k].abs());
-            let (mut up, mut um) = (u.clone(), u.clone());
-            up[k] += h;
-            um[k] -= h;
-            let (rp, rm) = (p.residuals(&up).unwrap(), p.residuals(&um).unwrap());
-            let colnorm: f64 = (0..r.len())
-                .map(|i| j[i * n + k].powi(2))
-                .sum::<f64>()
-                .sqrt();
-            for i in 0..r.len() {
-                let fd = (rp[i] - rm[i]) / (2.0 * h);
-                assert!(
-                    (fd - j[i * n + k]).abs() <= 1e-5 * colnorm,
-                    "u[{k}] residual {i}: analytic {} vs fd {fd}",
-                    j[i * n + k]
-                );
-            }
-        }
+        support::fixtures::assert_jacobian_matches_fd(&p, &u);
     }
 }

@@ -538,6 +538,24 @@ pub fn identify(
     let best_ee = land.fit_at(bi, bj).expect("best node solved").clone();
     // (nodes the data cannot separate are not in the landscape's minima)
     let phase_conv = best_ee.phase;
+    // the equation error at node (ρ, η) with the gain held at `g`
+    let solve_held_gain = |g: f64, rho: f64, eta: f64| {
+        let terms = Terms {
+            gain: Some(g),
+            ..terms_free
+        };
+        match phase_mode {
+            LandscapePhase::Ignore => solve_magnitude(&prep, terms, rho, eta, None).map(|x| x.0),
+            _ => solve_phase(
+                &prep,
+                terms,
+                rho,
+                eta,
+                phase_conv,
+                phase_conv.map_or(0.0, |c| c.delay),
+            ),
+        }
+    };
     // gain decision
     let mut gain_test = None;
     let gain_status = match plan.gain {
@@ -545,24 +563,7 @@ pub fn identify(
         GainChoice::Free => Status::Free,
         GainChoice::Auto => {
             let (rho, eta) = (land.rho[bi], land.eta[bj]);
-            let fixed_terms = Terms {
-                gain: Some(1.0),
-                ..terms_free
-            };
-            let conv = phase_conv;
-            let fixed = match phase_mode {
-                LandscapePhase::Ignore => {
-                    solve_magnitude(&prep, fixed_terms, rho, eta, None).map(|x| x.0)
-                }
-                _ => solve_phase(
-                    &prep,
-                    fixed_terms,
-                    rho,
-                    eta,
-                    conv,
-                    conv.map_or(0.0, |c| c.delay),
-                ),
-            };
+            let fixed = solve_held_gain(1.0, rho, eta);
             let free_gain = best_ee.theta[GAIN];
             let (lo, hi) = spec0.bounds[GAIN];
             let dof = best_ee
@@ -639,24 +640,7 @@ pub fn identify(
     let with_gain_decided = |i: usize, j: usize, ee: &EquationErrorFit| -> EquationErrorFit {
         match gain_status {
             Status::Fixed(g) if (ee.theta[GAIN] - g).abs() > 1e-9 * g.abs() => {
-                let terms = Terms {
-                    gain: Some(g),
-                    ..terms_free
-                };
-                let (rho, eta) = (land.rho[i], land.eta[j]);
-                let held = match phase_mode {
-                    LandscapePhase::Ignore => {
-                        solve_magnitude(&prep, terms, rho, eta, None).map(|x| x.0)
-                    }
-                    _ => solve_phase(
-                        &prep,
-                        terms,
-                        rho,
-                        eta,
-                        phase_conv,
-                        phase_conv.map_or(0.0, |c| c.delay),
-                    ),
-                };
+                let held = solve_held_gain(g, land.rho[i], land.eta[j]);
                 held.unwrap_or_else(|_| ee.clone())
             }
             _ => ee.clone(),

@@ -640,6 +640,15 @@ pub fn model_amplitudes(data: &Dataset, theta: &Parameters) -> Result<Vec<Vec<f6
         .collect())
 }
 
+/// The first-order HB response of `model` at curve `c`'s input `gain·γ`.
+fn curve_response(
+    model: &NormalisedModel,
+    theta: &Parameters,
+    c: &super::data::Curve,
+) -> Result<ForcedResponse, SolveError> {
+    ForcedResponse::from_normalised(model, theta[GAIN] * c.gamma, Formulation::HarmonicBalance)
+}
+
 /// The model's response at every measured step under `branch`: `(a, φ)`
 /// per step in data order, sticking points `(0, 0)`
 /// ([`ResponseBranch::Sweep`]: [`model_response`]).
@@ -656,11 +665,7 @@ pub fn branch_response(
     data.curves
         .par_iter()
         .map(|c| {
-            let r = ForcedResponse::from_normalised(
-                &model,
-                theta[GAIN] * c.gamma,
-                Formulation::HarmonicBalance,
-            )?;
+            let r = curve_response(&model, theta, c)?;
             c.omegas
                 .iter()
                 .zip(&c.amplitudes)
@@ -712,11 +717,7 @@ pub fn model_sweeps(
     data.curves
         .par_iter()
         .map(|c| {
-            let r = ForcedResponse::from_normalised(
-                &model,
-                theta[GAIN] * c.gamma,
-                Formulation::HarmonicBalance,
-            )?;
+            let r = curve_response(&model, theta, c)?;
             let sw = r.sweep_from(&c.omegas, c.direction, first_amplitude(c))?;
             let mut out: Vec<(f64, f64)> = sw
                 .points

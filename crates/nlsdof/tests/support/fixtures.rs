@@ -121,3 +121,32 @@ fn rng_is_uniform_and_normal() {
     assert!(mean.abs() < 5.0 / (n as f64).sqrt(), "{mean}");
     assert!((var - 1.0).abs() < 5.0 * (2.0 / n as f64).sqrt(), "{var}");
 }
+
+/// Checks the analytic Jacobian of `p` at `u` against central differences
+/// (step `1e-6 (1 + |u_k|)`): every entry within `1e-5` of its column's norm.
+pub fn assert_jacobian_matches_fd(
+    p: &impl nlsdof::identification::levenberg_marquardt::LeastSquares,
+    u: &[f64],
+) {
+    let (r, j) = p.residuals_and_jacobian(u).unwrap();
+    let n = u.len();
+    for k in 0..n {
+        let h = 1e-6 * (1.0 + u[k].abs());
+        let (mut up, mut um) = (u.to_vec(), u.to_vec());
+        up[k] += h;
+        um[k] -= h;
+        let (rp, rm) = (p.residuals(&up).unwrap(), p.residuals(&um).unwrap());
+        let colnorm: f64 = (0..r.len())
+            .map(|i| j[i * n + k].powi(2))
+            .sum::<f64>()
+            .sqrt();
+        for i in 0..r.len() {
+            let fd = (rp[i] - rm[i]) / (2.0 * h);
+            assert!(
+                (fd - j[i * n + k]).abs() <= 1e-5 * colnorm,
+                "u[{k}] residual {i}: analytic {} vs fd {fd}",
+                j[i * n + k]
+            );
+        }
+    }
+}

@@ -30,7 +30,7 @@
 //! | [time simulation](#simulate) from a recorded or analytic input | [`simulation::simulate`], [`simulation::simulate_to_vec`], [`simulation::simulate_excitation`] | [`simulation::Trajectory`] |
 //! | [virtual stepped-sine rig](#rig) | [`stepped_sine::run`], [`stepped_sine::run_sweeps`] | [`stepped_sine::RigSweep`] |
 //! | [fit](#fit) of a power-law model to stepped-sine curves | [`identification::identify()`] (staged), [`identification::fit`] (Eq 31) | [`identification::Identification`] |
-//! | an estimator of your own on the Eq 31 objective (e.g. minimax jump errors, `nlsdof-studies`) | [`identification::objective::Problem`] with [`identification::levenberg_marquardt::minimise`] and [`identification::jumps::WithJumps`] | [`identification::levenberg_marquardt::LmResult`] |
+//! | an estimator of your own on the Eq 31 objective (e.g. minimax jump errors, `nlsdof-studies`), or on the branch-free output error ([`identification::ResponseBranch`]) | [`identification::objective::Problem`] with [`identification::levenberg_marquardt::minimise`] and [`identification::jumps::WithJumps`] | [`identification::levenberg_marquardt::LmResult`] |
 //! | [linear identification](#linear-identification) of an SDoF from an FRF | [`vector_fitting::identify_sdof`] | [`vector_fitting::SdofIdentification`] |
 //! | FRF estimation from time histories | [`signal_processing::welch_frf`], [`signal_processing::spectral_ratio`] | [`signal_processing::FrfEstimate`] |
 //! | [spectrogram comparison](#spectrogram) (Eq 33) | [`signal_processing::compare_records`] | [`signal_processing::SpectrogramComparison`] |

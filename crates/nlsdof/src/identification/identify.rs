@@ -680,7 +680,12 @@ pub fn identify(
             // the jump residuals from its optimum.
             let mut free_branch = spec.clone();
             free_branch.branch = ResponseBranch::Nearest;
-            let mut nearest_opts = opts.clone();
+            // (one start: it only seeds the Eq 31 fit, which runs the
+            // plan's `starts`)
+            let mut nearest_opts = FitOptions {
+                starts: 1,
+                ..opts.clone()
+            };
             nearest_opts.lm.max_iterations = nearest_opts.lm.max_iterations.min(NEAREST_ITERATIONS);
             if let Ok(r) = fit_impl(&refine_data, &free_branch, &nearest_opts, None, &|| {}) {
                 for j in spec.free_indices() {

@@ -119,6 +119,8 @@ pub enum ResponseBranch {
     /// from its optimum.
     Nearest,
 }
+
+/// Sign of the nonlinear stiffness coefficient β in a fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Sign {
     /// β > 0: the resonance bends to higher frequencies.

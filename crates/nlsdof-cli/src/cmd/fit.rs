@@ -215,7 +215,12 @@ pub struct Args {
 }
 
 fn fit_long_help() -> String {
-    "OBJECTIVE (Eq 31): sum over levels and steps of (a_model/gamma - a_meas/gamma)^2, the model amplitude \
+    "DEFAULT FIT (stages): branch-free equation error -> exponent landscape over (rho, eta) -> sign, gain \
+and jump handling chosen from the data -> for each of the best --refine nodes: its equation error with \
+the chosen gain, a branch-free output error (each point against the model's nearest stable state, at \
+most 30 iterations), then Eq 31 from there -> the best fit refined on all points (data of at most \
+50,000 points; a 1500-point subsample before). Details: docs/identification.md.\n\n\
+OBJECTIVE (Eq 31): sum over levels and steps of (a_model/gamma - a_meas/gamma)^2, the model amplitude \
 following the measured sweep direction (branch following through jumps).\n\n\
 PARAMETERS are mass-normalised (only ratios to m are identifiable with acceleration input): \
 alpha = k/m, delta = c/m, beta = k_r/m, kappa = c_e/m, exponents rho, eta, and the forcing gain \

@@ -227,7 +227,7 @@ alpha = k/m, delta = c/m, beta = k_r/m, kappa = c_e/m, exponents rho, eta, and t
 (the model sees gain*gamma; fixed at 1 unless --free gain).\n\n\
 DEFAULT BOUNDS (derived from the data): alpha in [(Omega_min/2)^2, (1.5 Omega_max)^2]; delta in \
 [1e-4, 1e2] x delta0 (delta0 from the lowest level's peak height); beta_ref = g(rho) beta A_ref^rho \
-in [1e-6, 2] x alpha0; kappa_ref = g(eta) kappa (Omega_ref A_ref)^eta in [1e-6, 1e2] x delta0; \
+in [1e-6, 20] x alpha0; kappa_ref = g(eta) kappa (Omega_ref A_ref)^eta in [1e-6, 1e2] x delta0; \
 rho in [0, 10]; eta in [-1, 8]; gain in [0.1, 10]. A_ref is the largest measured amplitude, \
 Omega_ref its frequency. --bounds FILE overrides: lines `alpha = [min, max]`.\n\n\
 JUMP FREQUENCIES (--jump-weight LAMBDA): Eq 31 is piecewise constant in the location of a jump (moving the predicted jump across one measured step changes the cost by a step), so a plain fit can put the jump-down several per cent away from the measured one. With LAMBDA > 0 each up-sweep with a measured jump adds the residual sqrt(LAMBDA n_c) (a_peak/gamma) (f_jump,model / f_jump,measured - 1), f_jump,model = the model's fold frequency (its 90-degree frequency where it has no fold), with analytic derivatives. The reported cost, RMS and intervals are those of Eq 31 alone at the optimum. Example (clamped beam): --free gain --jump-weight 100. Not with --integer, --sign auto or --phase-resonance.\n\n\

@@ -673,6 +673,18 @@ pub fn identify(
                 spec.start[GAIN] = g;
             }
             spec.phase_weight = use_phase.then_some(plan.phase_weight);
+            // Softening: `|β_ref| < α` keeps the backbone frequency real at
+            // A_ref. The default bound `0.95 α₀` uses the peak-based α₀,
+            // which strong softening pulls below α (11 % on a synthetic
+            // case, whose truth the bound then excluded); the candidate's
+            // equation-error α (inside α's bounds) is the better estimate,
+            // so the bound is raised to 0.95 of it when that is larger (not
+            // when the plan sets β's bounds).
+            let user_beta_bounds = plan.bounds.iter().any(|(n, _, _)| n == "beta");
+            if sign == Sign::Softening && spec.status[BETA] == Status::Free && !user_beta_bounds {
+                let alpha = ee.theta[ALPHA].min(spec.bounds[ALPHA].1);
+                spec.bounds[BETA].1 = spec.bounds[BETA].1.max(0.95 * alpha);
+            }
             start_from(&mut spec, ee, integer);
             // Branch-free output error first (each point against the
             // model's nearest stable state: continuous where Eq 31 jumps

@@ -451,12 +451,11 @@ impl FitResult {
                 continue;
             }
             let info = p.info();
-            let interval = res.uncertainty.as_ref().filter(|_| valid).and_then(|u| {
-                u.names
-                    .iter()
-                    .position(|n| *n == PARAM_NAMES[j])
-                    .map(|k| (u.lower[k], u.upper[k]))
-            });
+            let interval = res
+                .uncertainty
+                .as_ref()
+                .filter(|_| valid)
+                .and_then(|u| u.index(PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k])));
             let d = PyDict::new(py);
             d.set_item("value", res.theta[j])?;
             d.set_item("interval", interval)?;

@@ -278,12 +278,7 @@ pub fn parameters_json(
         if status[j] == Status::Absent {
             continue;
         }
-        let unc = unc.and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == PARAM_NAMES[j])
-                .map(|k| (u, k))
-        });
+        let unc = unc.and_then(|u| u.index(PARAM_NAMES[j]).map(|k| (u, k)));
         let info = Parameter::ALL[j].info();
         let phys = |v: f64| {
             if Parameter::ALL[j].mass_scaled() {
@@ -444,12 +439,7 @@ pub fn parameter_table_text(
         if status[j] == Status::Absent {
             continue;
         }
-        let u_k = unc.and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == PARAM_NAMES[j])
-                .map(|k| (u, k))
-        });
+        let u_k = unc.and_then(|u| u.index(PARAM_NAMES[j]).map(|k| (u, k)));
         let (se, ci) = match u_k {
             Some((u, k)) => (
                 format!("{:.4e}", u.std_errors[k]),

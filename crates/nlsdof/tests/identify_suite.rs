@@ -78,9 +78,7 @@ fn run(c: &Case, weighting: Weighting) -> Outcome {
     let in_ci = |name: &str, j: usize| {
         res.fit.intervals_valid()
             && res.fit.uncertainty.as_ref().is_some_and(|u| {
-                u.names
-                    .iter()
-                    .position(|n| *n == name)
+                u.index(name)
                     .is_some_and(|k| u.lower[k] <= t[j] && t[j] <= u.upper[k])
             })
     };

@@ -683,12 +683,10 @@ pub fn build_tables(demo: &Demo) -> Vec<Table> {
                 if r.status[j] == Status::Absent || j == GAIN {
                     continue;
                 }
-                let unc = r.uncertainty.as_ref().and_then(|u| {
-                    u.names
-                        .iter()
-                        .position(|n| *n == PARAM_NAMES[j])
-                        .map(|k| (u.lower[k], u.upper[k]))
-                });
+                let unc = r
+                    .uncertainty
+                    .as_ref()
+                    .and_then(|u| u.index(PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k])));
                 // the truth is comparable when the model has the true exponent structure
                 let comparable = match j {
                     ALPHA | DELTA => true,
@@ -880,7 +878,7 @@ fn fit_json(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Value {
         .filter(|&j| r.status[j] != Status::Absent && j != GAIN)
         .map(|j| {
             let unc = r.uncertainty.as_ref().and_then(|u| {
-                u.names.iter().position(|n| *n == PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k], u.std_errors[k]))
+                u.index(PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k], u.std_errors[k]))
             });
             let comparable = match j {
                 ALPHA | DELTA => true,

@@ -63,12 +63,7 @@ pub fn default_step(fit: &super::FitResult, parameter: Parameter) -> f64 {
     let name = parameter.info().name;
     fit.uncertainty
         .as_ref()
-        .and_then(|u| {
-            u.names
-                .iter()
-                .position(|n| *n == name)
-                .map(|k| u.std_errors[k])
-        })
+        .and_then(|u| u.index(name).map(|k| u.std_errors[k]))
         .filter(|s| s.is_finite() && *s > 0.0)
         .map_or(0.05, |s| 0.5 * s)
 }
@@ -198,14 +193,8 @@ mod tests {
             .map(|i| std::f64::consts::TAU * (8.0 + 5.0 * i as f64 / 39.0))
             .collect();
         // SplitMix64 + Box-Muller: 1 % relative amplitude noise, fixed seed
-        let mut state = 11u64;
-        let mut uniform = || {
-            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::identification::global::SplitMix64(11);
+        let mut uniform = || rng.next_f64();
         let mut recs = Vec::new();
         for (l, &g) in [0.3, 0.6, 0.9].iter().enumerate() {
             let r =
@@ -230,7 +219,7 @@ mod tests {
         start_spec.start = theta;
         let best = fit(&data, &start_spec, &FitOptions::default(), &|| {}).unwrap();
         let u = best.uncertainty.as_ref().expect("intervals");
-        let k = u.names.iter().position(|n| *n == "rho").unwrap();
+        let k = u.index("rho").unwrap();
         let (lin_lo, lin_hi, se) = (u.lower[k], u.upper[k], u.std_errors[k]);
         let prof =
             output_error_profile(&data, &spec, &best.theta, Parameter::Rho, 0.5 * se, 20).unwrap();

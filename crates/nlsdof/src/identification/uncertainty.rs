@@ -22,6 +22,14 @@ pub struct Uncertainty {
     pub dof: usize,
 }
 
+impl Uncertainty {
+    /// Position of parameter `name` (e.g. `"rho"`) among the free
+    /// parameters, `None` when it is not free.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| *n == name)
+    }
+}
+
 /// z-value of a two-sided 95 % normal interval.
 pub const Z95: f64 = 1.959_963_984_540_054;
 

@@ -216,9 +216,11 @@ pub struct Args {
 
 fn fit_long_help() -> String {
     "DEFAULT FIT (stages): branch-free equation error -> exponent landscape over (rho, eta) -> sign, gain \
-and jump handling chosen from the data -> for each of the best --refine nodes: its equation error with \
+and jump handling chosen from the data (jump residuals with LAMBDA = 100 when an up-sweep shows a \
+measured jump) -> for each of the best --refine nodes: its equation error with \
 the chosen gain, a branch-free output error (each point against the model's nearest stable state, at \
-most 30 iterations), then Eq 31 from there -> the best fit refined on all points (data of at most \
+most 30 iterations), then Eq 31 from there (at most 30 iterations; only the best one continues) -> \
+the best fit refined on all points (data of at most \
 50,000 points; a 1500-point subsample before). Details: docs/identification.md.\n\n\
 OBJECTIVE (Eq 31): sum over levels and steps of (a_model/gamma - a_meas/gamma)^2, the model amplitude \
 following the measured sweep direction (branch following through jumps).\n\n\

@@ -7,15 +7,25 @@ use super::equation::{amplitude_bound, ResponseEquation};
 use super::ForcedResponse;
 
 /// Whether the fast-path certificate can apply at all to this response:
-/// `ρ ≥ 0` (or no stiffness term) and `η > −1` (or no damping term).
+/// `ρ ≥ 0` (or no stiffness term) and `η ≥ −1` (or no damping term).
+///
+/// At `η = −1` (Coulomb friction) the damping part of `P` is
+/// `x²D² = (d₀x + d₁)²`, still increasing in `x`, so a certified cell has
+/// an increasing `P` as for `η > −1`; but `P(0⁺) = d₁²` is no longer 0, so
+/// a certified cell has *at most* one root: none where `d₁ ≥ 1` (the
+/// friction holds the mass). Every user of the certificate falls back to
+/// exact root isolation when its Newton solve finds no root, and a cell
+/// whose count goes from one root to none holds no fold.
 pub(crate) fn fast_path_possible(r: &ForcedResponse) -> bool {
-    (r.b == 0.0 || r.model.rho >= 0.0) && (r.c == 0.0 || r.model.eta > -1.0)
+    (r.b == 0.0 || r.model.rho >= 0.0) && (r.c == 0.0 || r.model.eta >= -1.0)
 }
 
 /// Certificate that `P(x) = 1` has exactly one root for *every* frequency
-/// between the two cell ends `a` and `b` (equations at the two ends).
+/// between the two cell ends `a` and `b` (equations at the two ends); at
+/// most one at `η = −1` (see [`fast_path_possible`]).
 ///
-/// With `η > −1`, `ρ ≥ 0`, all exponents of `P − 1` except 0 are positive and
+/// With `η ≥ −1`, `ρ ≥ 0`, all exponents of `P − 1` except 0 are positive
+/// (at `η = −1` the `d₁²` term is a constant and its derivative vanishes) and
 ///
 /// ```text
 /// dP/dt = x² [ 2(s₀²+d₀²) + 2(2+ρ) s₀s₁ z + 2(1+ρ) s₁² z² + (≥ 0 damping terms) ],  z = x^ρ
@@ -115,6 +125,7 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let (mut certified, mut checked, mut by_damping) = (0, 0, 0);
+        let (mut coulomb, mut sticking) = (0, 0);
         for _ in 0..3000 {
             let wn = 10.0;
             let model = NormalisedModel {
@@ -127,7 +138,12 @@ mod tests {
                 } else {
                     10f64.powf(-4.0 + 5.0 * rnd())
                 },
-                eta: -0.95 + 5.0 * rnd(),
+                // one case in ten at Coulomb friction (η = −1)
+                eta: if rnd() < 0.1 {
+                    -1.0
+                } else {
+                    -0.95 + 5.0 * rnd()
+                },
             };
             let gamma = 10f64.powf(-1.0 + 2.0 * rnd());
             for formulation in [Formulation::HarmonicBalance, Formulation::Modulation] {
@@ -147,18 +163,39 @@ mod tests {
                 }
                 for k in 0..40 {
                     let w = w0 + (w1 - w0) * k as f64 / 39.0;
-                    if let Ok(roots) = r.equation(w).roots() {
-                        assert_eq!(roots.len(), 1, "{model:?} γ={gamma} Ω={w}: {roots:?}");
+                    let eq = r.equation(w);
+                    if let Ok(roots) = eq.roots() {
+                        // η = −1: none exactly when the friction holds the
+                        // mass (P(0⁺) = d₁² ≥ 1), else one
+                        let expected = if model.eta == -1.0 && model.kappa > 0.0 && eq.d1 >= 1.0 {
+                            0
+                        } else {
+                            1
+                        };
+                        assert_eq!(
+                            roots.len(),
+                            expected,
+                            "{model:?} γ={gamma} Ω={w}: {roots:?}"
+                        );
                         checked += 1;
+                        if model.eta == -1.0 && model.kappa > 0.0 {
+                            coulomb += 1;
+                            sticking += usize::from(expected == 0);
+                        }
                     }
                 }
             }
         }
         // the damping part of the certificate is exercised too
-        eprintln!("{certified} certified cells, {by_damping} by the damping part");
+        eprintln!(
+            "{certified} certified cells, {by_damping} by the damping part; \
+             {coulomb} Coulomb frequencies checked, {sticking} sticking"
+        );
         assert!(
             certified > 1000 && checked > 40_000 && by_damping > 100,
             "{certified} {checked} {by_damping}"
         );
+        // Coulomb cells, with and without sticking, are exercised too
+        assert!(coulomb > 2000 && sticking > 0, "{coulomb} {sticking}");
     }
 }

@@ -422,6 +422,51 @@ fn coulomb_with_regularisation_converges_to_time_integration() {
     assert!(chk.relative_change < 1e-5);
 }
 
+/// Coulomb friction: the balance converges like 1/n (n = odd harmonics
+/// here), so no affordable H reaches 1e-6 (7.4e-4 at H = 25, 1.9e-4 at
+/// H = 100, test above); Richardson extrapolation in n from H and 2H
+/// (`extrapolation::first_harmonic_extrapolated`) removes the 1/n term and
+/// matches the periodic orbit of the time integration to 1e-6.
+#[test]
+fn coulomb_first_harmonic_extrapolated_in_h_matches_time_integration() {
+    use nlsdof::multi_harmonic::extrapolation::first_harmonic_extrapolated;
+    let m = coulomb();
+    let gamma = 10.0;
+    let settings = HarmonicSettings {
+        regularisation: 1e-4,
+        aliasing_tol: 1e-9,
+        ..HarmonicSettings::default()
+    };
+    let omega = 0.8 * m.omega_n();
+    // the periodic orbit by shooting (Dormand–Prince, rtol 1e-12), started
+    // from the H = 100 balance
+    let (_, q) = hb_solution(&m, gamma, omega, 100, settings);
+    let s0 = State {
+        x: displacement_at(&q, omega, 0.0),
+        v: velocity_at(&q, omega, 0.0),
+    };
+    let (_, _, harm) = shoot(&m, gamma, omega, s0, 8192);
+    let a_ref = harm[1].0.hypot(harm[1].1);
+    let rel = |a: f64| (a - a_ref).abs() / a_ref;
+    for h in [25usize, 50] {
+        let e = first_harmonic_extrapolated(&m, gamma, omega, h, settings, StartRoot::Smallest)
+            .unwrap();
+        eprintln!(
+            "coulomb H = {h} and {}: a1 rel errors {:.2e} and {:.2e}, extrapolated {:.2e} (n = {}, {})",
+            2 * h,
+            rel(e.coarse.2),
+            rel(e.fine.2),
+            rel(e.amplitude),
+            e.coarse.1,
+            e.fine.1
+        );
+        // half-wave symmetry recognised: n = odd harmonics
+        assert_eq!((e.coarse.1, e.fine.1), (h.div_ceil(2), h));
+        assert!(rel(e.amplitude) < 1e-6, "H = {h}: {:e}", rel(e.amplitude));
+        assert!(rel(e.amplitude) < 1e-2 * rel(e.fine.2));
+    }
+}
+
 // ------------------------------------------------------------ convergence in H
 
 #[test]

@@ -20,6 +20,9 @@
 //! * [`sweep`] — a stepped-sine sweep (jumps at folds) read off a branch;
 //! * [`truncation`] — error of the truncation (first order included) in
 //!   the peak and the folds against H, until convergence;
+//! * [`extrapolation`] — Richardson extrapolation in the number of
+//!   harmonics, for Coulomb friction, where the balance converges only
+//!   like `1/H`;
 //! * [`backbone`] — periodic orbits of the conservative system (nonlinear
 //!   normal mode) as amplitude against frequency.
 //!
@@ -30,6 +33,7 @@
 pub mod aft;
 pub mod backbone;
 pub mod continuation;
+pub mod extrapolation;
 pub mod levels;
 pub mod stability;
 pub mod sweep;

@@ -3,7 +3,7 @@
 //! harmonics H, the resonance peak and the folds, with their errors
 //! relative to the converged H, as JSON and text.
 
-use nlsdof::multi_harmonic::truncation::TruncationStudy;
+use nlsdof::multi_harmonic::truncation::{TruncationRow, TruncationStudy};
 use nlsdof::Model;
 use serde_json::{json, Value};
 use std::f64::consts::PI;
@@ -29,9 +29,15 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
+/// The row the errors are measured against: the extrapolation in H
+/// (Coulomb friction) when the study made one, else the reference H.
+fn reference_row(st: &TruncationStudy) -> &TruncationRow {
+    st.extrapolated.as_ref().unwrap_or(&st.rows[st.reference])
+}
+
 fn errors(st: &TruncationStudy, i: usize) -> (Option<f64>, Option<f64>, Vec<Option<f64>>) {
     let r = &st.rows[i];
-    let reference = &st.rows[st.reference];
+    let reference = reference_row(st);
     let (pa, pf) = match (r.peak, reference.peak) {
         (Some(p), Some(q)) => (Some(rel(p.1, q.1)), Some(rel(p.0, q.0))),
         _ => (None, None),
@@ -79,6 +85,13 @@ pub fn study_json(req: &StudyRequest, model: &Model, studies: &[(f64, Truncation
                 "gamma": g,
                 "converged": st.converged,
                 "reference_harmonics": st.rows[st.reference].harmonics,
+                // Coulomb friction: Richardson extrapolation in H of the
+                // last two rows, the reference of the errors
+                "extrapolated": st.extrapolated.as_ref().map(|r| json!({
+                    "from_harmonics": [st.rows[st.reference.saturating_sub(1)].harmonics, r.harmonics],
+                    "peak": r.peak.map(|p| json!({"f_hz": hz(p.0), "amplitude": p.1, "max_abs_x": p.2})),
+                    "folds_hz": r.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
+                })),
                 "rows": rows,
             })
         })
@@ -89,7 +102,7 @@ pub fn study_json(req: &StudyRequest, model: &Model, studies: &[(f64, Truncation
         "f_min_hz": req.f_min,
         "f_max_hz": req.f_max,
         "tol": req.tol,
-        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak (first harmonic)", "errors": "relative, against the reference H"},
+        "units": {"gamma": "m/s^2 zero-to-peak", "amplitude": "m zero-to-peak (first harmonic)", "errors": "relative, against the reference H (Coulomb friction: against the extrapolation in H)"},
         "levels": levels,
     })
 }
@@ -122,6 +135,30 @@ pub fn study_text(req: &StudyRequest, model: &Model, studies: &[(f64, Truncation
             },
             reference.harmonics
         );
+        if let Some(x) = &st.extrapolated {
+            let h0 = st.rows[st.reference.saturating_sub(1)].harmonics;
+            let peak = x.peak.map_or("no peak".into(), |p| {
+                format!("peak a1 {:.7e} m at {:.8} Hz", p.1, hz(p.0))
+            });
+            let _ = writeln!(
+                s,
+                "  Coulomb friction: HB converges only like 1/H; errors are against the Richardson \
+                 extrapolation of H = {h0} and {}: {peak}{}",
+                x.harmonics,
+                if x.folds.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        ", folds {}",
+                        x.folds
+                            .iter()
+                            .map(|f| format!("{:.8} Hz", hz(f.0)))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                }
+            );
+        }
         let _ = writeln!(
             s,
             "   H   peak a1 [m]    peak f [Hz]   max|x| [m]     err a1     err f_peak  folds [Hz] (err)                     N"

@@ -467,6 +467,57 @@ fn coulomb_first_harmonic_extrapolated_in_h_matches_time_integration() {
     }
 }
 
+/// `truncation_study` (what `nlsdof hb-error` runs) with Coulomb friction:
+/// the rows converge like 1/n, so the study extrapolates consecutive rows
+/// in n and measures the errors against the extrapolation. Its peak
+/// amplitude (from H = 3 and 5) agrees to 1e-6 with the extrapolation of
+/// single-frequency balances with H = 15 and 30 at the same frequency (the
+/// peak is flat, so the frequency's own error does not matter), while the
+/// plain H = 5 row is further off than the study's tolerance.
+#[test]
+fn coulomb_truncation_study_extrapolates_in_h() {
+    use nlsdof::multi_harmonic::extrapolation::first_harmonic_extrapolated;
+    use nlsdof::multi_harmonic::truncation::truncation_study;
+    let m = coulomb();
+    let gamma = 10.0;
+    let settings = settings_for(&m);
+    let opts = ContinuationOptions {
+        max_dp: 1.0 / 50.0,
+        ..ContinuationOptions::default()
+    };
+    let st = truncation_study(
+        &m,
+        gamma,
+        TAU * 4.9,
+        TAU * 5.2,
+        &[1, 3, 5, 7],
+        1e-6,
+        settings,
+        &opts,
+    )
+    .unwrap();
+    let x = st.extrapolated.as_ref().expect("Coulomb: extrapolated");
+    let (w_peak, a_peak, _) = x.peak.unwrap();
+    let fine =
+        first_harmonic_extrapolated(&m, gamma, w_peak, 15, settings, StartRoot::Largest).unwrap();
+    let rel = |a: f64| (a - fine.amplitude).abs() / fine.amplitude;
+    let raw = st.rows[st.reference].peak.unwrap().1;
+    eprintln!(
+        "coulomb study: converged {} at H = {}; extrapolated peak a1 {a_peak:.9e} at {:.7} Hz, rel {:.2e} to H = 15/30 extrapolated; plain H = {}: {:.2e}",
+        st.converged,
+        st.rows[st.reference].harmonics,
+        w_peak / TAU,
+        rel(a_peak),
+        st.rows[st.reference].harmonics,
+        rel(raw)
+    );
+    assert!(st.converged);
+    assert!(rel(a_peak) < 1e-6, "{:e}", rel(a_peak));
+    assert!(rel(raw) > 1e-6 && rel(a_peak) < 0.2 * rel(raw));
+    // the change of a Coulomb row is that of the extrapolations
+    assert!(st.rows[1].change.is_nan() && st.rows[st.reference].change <= 1e-6);
+}
+
 // ------------------------------------------------------------ convergence in H
 
 #[test]

@@ -11,8 +11,18 @@
 //! H is the reference and every row's error is measured against it. If
 //! the list ends first, the study is reported as not converged (the last
 //! change is given).
+//!
+//! **Coulomb friction** (`κ > 0`, `η = −1`) converges only like `1/n`
+//! ([`super::extrapolation`]; `n` the harmonics carrying the response, the
+//! odd ones under half-wave symmetry): the change between two rows then
+//! understates the error of the last (by `n₁/(n₂ − n₁)`, e.g. 2 from H = 3
+//! to 5). For such models every pair of consecutive rows is extrapolated
+//! in `n` (Richardson: peak frequency, amplitude, `max|x|` and folds), the
+//! study stops when two successive extrapolations agree to `tol`, and the
+//! last extrapolation is the reference ([`TruncationStudy::extrapolated`]).
 
 use super::continuation::{continue_in_omega, ContinuationOptions};
+use super::extrapolation::{effective_harmonics, richardson};
 use super::system::HarmonicSettings;
 use super::{max_abs_displacement, MhbError};
 use crate::model::AsNormalised;
@@ -31,7 +41,9 @@ pub struct TruncationRow {
     /// Points of the branch.
     pub points: usize,
     /// Largest relative change from the previous row (∞ if the fold count
-    /// changed, NaN for the first row).
+    /// changed, NaN for the first row). With Coulomb friction (module
+    /// docs): the change of the extrapolation ending at this row from the
+    /// one ending at the previous row (NaN for the first two rows).
     pub change: f64,
     /// Set if the continuation stopped early.
     pub warning: Option<MhbError>,
@@ -44,6 +56,47 @@ pub struct TruncationStudy {
     /// Index of the reference row (the converged H, or the last row).
     pub reference: usize,
     pub converged: bool,
+    /// With Coulomb friction (module docs): the Richardson extrapolation in
+    /// the number of harmonics of the reference row and the row before it
+    /// (its `harmonics` is the reference row's H, `samples` and `points`
+    /// are the reference row's); the errors of the rows are measured
+    /// against it. `None` for every other model, or with fewer than two
+    /// rows.
+    pub extrapolated: Option<TruncationRow>,
+}
+
+/// Richardson extrapolation in the effective harmonic counts `(n_a, n_b)`
+/// of two rows (every quantity `Q(n) = Q∞ + c/n`); `None` if the rows do
+/// not have the same peaks and folds.
+fn extrapolate(
+    a: &TruncationRow,
+    na: usize,
+    b: &TruncationRow,
+    nb: usize,
+) -> Option<TruncationRow> {
+    if a.folds.len() != b.folds.len() || a.peak.is_some() != b.peak.is_some() || na == nb {
+        return None;
+    }
+    let r = |x: f64, y: f64| richardson(na, x, nb, y).ok();
+    let peak = match (a.peak, b.peak) {
+        (Some(p), Some(q)) => Some((r(p.0, q.0)?, r(p.1, q.1)?, r(p.2, q.2)?)),
+        _ => None,
+    };
+    let folds = a
+        .folds
+        .iter()
+        .zip(&b.folds)
+        .map(|(f, g)| Some((r(f.0, g.0)?, r(f.1, g.1)?)))
+        .collect::<Option<Vec<_>>>()?;
+    Some(TruncationRow {
+        harmonics: b.harmonics,
+        peak,
+        folds,
+        samples: b.samples,
+        points: b.points,
+        change: f64::NAN,
+        warning: None,
+    })
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -99,20 +152,25 @@ pub fn truncation_study(
             value: 0.0,
         });
     }
+    let coulomb = model.kappa > 0.0 && model.eta == -1.0;
     let mut rows: Vec<TruncationRow> = Vec::new();
+    // effective harmonic counts of the rows, and the extrapolations (Coulomb)
+    let mut counts: Vec<usize> = Vec::new();
+    let mut extrapolations: Vec<Option<TruncationRow>> = Vec::new();
     for &h in harmonics {
         let br = continue_in_omega(model, gamma, h, omega_min, omega_max, settings, opts)?;
-        let peak = br
+        let peak_point = br
             .peaks
             .iter()
-            .max_by(|a, b| a.amplitude(1).total_cmp(&b.amplitude(1)))
-            .map(|p| {
-                (
-                    p.omega,
-                    p.amplitude(1),
-                    max_abs_displacement(&p.coefficients),
-                )
-            });
+            .max_by(|a, b| a.amplitude(1).total_cmp(&b.amplitude(1)));
+        counts.push(peak_point.map_or(h, |p| effective_harmonics(&p.coefficients, h)));
+        let peak = peak_point.map(|p| {
+            (
+                p.omega,
+                p.amplitude(1),
+                max_abs_displacement(&p.coefficients),
+            )
+        });
         let mut folds: Vec<(f64, f64)> = br
             .limit_points
             .iter()
@@ -129,23 +187,31 @@ pub fn truncation_study(
             warning: br.warning,
         };
         if let Some(prev) = rows.last() {
-            row.change = row_difference(&row, prev);
+            let k = rows.len();
+            if coulomb {
+                let e = extrapolate(prev, counts[k - 1], &row, counts[k]);
+                row.change = match (&e, extrapolations.last()) {
+                    (Some(e), Some(Some(p))) => row_difference(e, p),
+                    (None, _) => f64::INFINITY,
+                    _ => f64::NAN,
+                };
+                extrapolations.push(e);
+            } else {
+                row.change = row_difference(&row, prev);
+            }
         }
         let done = row.change <= tol && row.warning.is_none();
         rows.push(row);
         if done {
-            let reference = rows.len() - 1;
-            return Ok(TruncationStudy {
-                rows,
-                reference,
-                converged: true,
-            });
+            break;
         }
     }
     let reference = rows.len() - 1;
+    let converged = rows[reference].change <= tol && rows[reference].warning.is_none();
     Ok(TruncationStudy {
         rows,
         reference,
-        converged: false,
+        converged,
+        extrapolated: extrapolations.pop().flatten(),
     })
 }

@@ -117,13 +117,7 @@ mod tests {
     /// at every one of 40 frequencies across the cell.
     #[test]
     fn certified_cells_have_exactly_one_root() {
-        let mut state = 0x1234_5678_9abc_def0u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::harmonic_balance::test_uniform(0x1234_5678_9abc_def0u64);
         let (mut certified, mut checked, mut by_damping) = (0, 0, 0);
         let (mut coulomb, mut sticking) = (0, 0);
         for _ in 0..3000 {

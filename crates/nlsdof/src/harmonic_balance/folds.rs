@@ -462,13 +462,7 @@ mod tests {
     /// cell of ±0.1 % around it.
     #[test]
     fn critical_value_location_matches_count_bisection() {
-        let mut state = 0x0dd_f01d_5eed_1234u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::harmonic_balance::test_uniform(0x0dd_f01d_5eed_1234u64);
         let (mut folds, mut direct, mut coulomb) = (0, 0, 0);
         for case in 0..400 {
             let wn = 10.0;

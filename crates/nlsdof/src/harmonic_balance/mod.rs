@@ -512,3 +512,16 @@ pub fn sweep_levels(
         .map(|r| r.sweep(omegas, direction))
         .collect()
 }
+
+/// Uniform numbers in `[0, 1)` from a xorshift64 generator seeded with
+/// `seed` (non-zero): the random models of this module's tests.
+#[cfg(test)]
+pub(crate) fn test_uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

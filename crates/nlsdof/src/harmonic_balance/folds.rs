@@ -21,8 +21,8 @@
 //! cell, or the confirmation fails), the cell is bisected on `N` itself to
 //! `|ΔΩ|/Ω ≤ 4ε` (about 45 root isolations per fold; kept as the oracle of
 //! the critical-value location in the tests). `ln P` is computed with the
-//! unexpanded (accurate) formula, so the fold frequency
-//! is found to ~1e-14 relative either way. Two folds inside one grid cell (a narrow
+//! unexpanded (accurate) formula, so the fold frequency is found to ~1e-14
+//! relative either way. Two folds inside one grid cell (a narrow
 //! hysteresis window near a cusp) are caught by refining every cell where
 //! a local extremum of `ln P` — or, where no extremum exists at the cell
 //! ends, the slope of `ln P` at an inflection point — is closer to zero
@@ -33,6 +33,13 @@
 //! band, so that critical values stay near zero everywhere) the heuristic
 //! would otherwise refine almost every cell to full depth — thousands of
 //! root isolations per sweep for no fold.
+//!
+//! Limitation (measured in the sixth session with an exact-count grid of
+//! 1000 frequencies, 2e-5 apart, around the peak of random models at levels
+//! just above their cusp): windows a few 1e-5 wide are missed in about a
+//! third of such cases; the test of a 3e-5 Duffing window
+//! (`narrow_hysteresis_window_near_the_cusp_is_found`) passes. Such windows
+//! lie far inside any measured frequency step.
 
 use super::*;
 
@@ -175,8 +182,8 @@ fn locate_by_critical_value(r: &ForcedResponse, a: &Sample, b: &Sample) -> Optio
     if !(ha.is_finite() && hb.is_finite() && ha != 0.0 && hb != 0.0 && (ha > 0.0) != (hb > 0.0)) {
         return None;
     }
-    // each evaluation starts Newton from the extremum found at the nearest
-    // frequency evaluated so far
+    // each evaluation follows the extremum from the one found at the
+    // nearest frequency evaluated so far
     let seen = std::cell::RefCell::new(vec![(a.omega, ta), (b.omega, tb)]);
     let failed = std::cell::Cell::new(false);
     let start = |w: f64| {
@@ -209,8 +216,9 @@ fn locate_by_critical_value(r: &ForcedResponse, a: &Sample, b: &Sample) -> Optio
         return None;
     }
     // Verification by the exact root count just either side: it rules out
-    // a zero of h made by Newton switching extrema between evaluations (h
-    // then jumps). Two root isolations instead of the ~45 of the bisection.
+    // a zero of h made by the followed extremum switching to another one
+    // between evaluations (h then jumps). Two root isolations instead of
+    // the ~45 of the bisection.
     let count = |w: f64| r.equation(w).roots_t().map(|v| v.len()).ok();
     let (below, above) = (omega * (1.0 - 1e-9), omega * (1.0 + 1e-9));
     if below <= a.omega || above >= b.omega {

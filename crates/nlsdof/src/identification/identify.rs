@@ -34,7 +34,8 @@
 //!    [`NEAREST_ITERATIONS`]), then Eq 31 with the jump residuals from that
 //!    optimum, at most [`RACE_ITERATIONS`] LM iterations each. The lowest
 //!    objective wins (a converged fit only breaks a near tie), and a winner
-//!    stopped by its iteration limit is continued once; data longer than `refine_points` are then refined on all points
+//!    stopped by its iteration limit is continued once; data longer than
+//!    `refine_points` are then refined on all points
 //!    ([`FitPlan::refine_points`]). Residuals are Eq 31's, or relative ones
 //!    ([`Weighting`]). The result says whether it converged, which
 //!    parameters sit at bounds and which the data cannot separate

@@ -341,6 +341,46 @@ impl ForcedResponse {
         })
     }
 
+    /// As [`Self::steady_states`], faster where the one-root certificate of
+    /// the stepped-sine fast path holds at `omega` (`ρ ≥ 0`, `η ≥ −1`, see
+    /// [`sweep`](self)): the one root is then found by safeguarded Newton in
+    /// `ln a` from `guess` (m; any positive value, e.g. a measured
+    /// amplitude) instead of isolating every root. Falls back to
+    /// [`Self::steady_states`] wherever the certificate does not hold or
+    /// Newton fails (e.g. Coulomb friction that holds the mass).
+    pub fn steady_states_near(&self, omega: f64, guess: f64) -> Result<RootSet, SolveError> {
+        check_positive("omega", omega)?;
+        let eq = self.equation(omega);
+        if certificate::fast_path_possible(self) && certificate::certify_cell(&eq, &eq) {
+            let t_max = if eq.d0 > 0.0 {
+                -eq.d0.ln()
+            } else {
+                eq.amplitude_bound().ln()
+            };
+            let t0 = (guess / self.scale).ln();
+            let t0 = if t0.is_finite() {
+                t0.min(t_max)
+            } else {
+                (-0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln()).min(t_max)
+            };
+            if let Some(u) = eq.solve_unique_state(t0, t_max) {
+                let amplitude = u.t.exp() * self.scale;
+                if amplitude.is_finite() && amplitude > 0.0 {
+                    return Ok(RootSet {
+                        omega,
+                        roots: vec![SteadyState {
+                            amplitude,
+                            phase: u.phase,
+                            stable: u.stable,
+                        }],
+                        no_motion: None,
+                    });
+                }
+            }
+        }
+        self.steady_states(omega)
+    }
+
     /// All folds (saddle-node points) with `omega_min <= Ω <= omega_max`
     /// (rad/s), sorted by frequency, located to ~1e-13 relative.
     pub fn folds(&self, omega_min: f64, omega_max: f64) -> Result<Vec<Fold>, SolveError> {

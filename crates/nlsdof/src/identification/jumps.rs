@@ -369,6 +369,11 @@ impl<'a> WithJumps<'a> {
 }
 
 impl LeastSquares for WithJumps<'_> {
+    /// The sweeps dominate; the derivatives are analytic and cheap.
+    fn jacobian_with_trials(&self) -> bool {
+        true
+    }
+
     fn n_params(&self) -> usize {
         self.problem.free.len()
     }

@@ -15,6 +15,15 @@ pub trait LeastSquares: Sync {
     fn n_params(&self) -> usize;
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>>;
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)>;
+    /// `true` when [`Self::residuals_and_jacobian`] costs little more than
+    /// [`Self::residuals`] (analytic derivatives of an expensive model, as
+    /// the branch-following sweeps of Eq 31): [`minimise`] then evaluates
+    /// the Jacobian with every trial step and keeps it when the step is
+    /// accepted, instead of evaluating the accepted point a second time.
+    /// The iterates, counts and stopping rules are the same either way.
+    fn jacobian_with_trials(&self) -> bool {
+        false
+    }
 }
 
 /// Stopping rules.
@@ -269,7 +278,21 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 return done(u, cost, iterations, evaluations, Termination::MaxIterations);
             }
             evaluations += 1;
-            let trial = problem.residuals(&un);
+            // with the Jacobian when the problem asks for it (kept below if
+            // the step is accepted); residuals alone if that fails, so that
+            // the iterates do not depend on the choice
+            let mut trial_jacobian = None;
+            let trial = if problem.jacobian_with_trials() {
+                match problem.residuals_and_jacobian(&un) {
+                    Some((rn, jn)) => {
+                        trial_jacobian = Some((rn.clone(), jn));
+                        Some(rn)
+                    }
+                    None => problem.residuals(&un),
+                }
+            } else {
+                problem.residuals(&un)
+            };
             let cost_new = trial.as_ref().map(|t| sum_sq(t)).unwrap_or(f64::INFINITY);
             if cost_new < cost {
                 let rho = if pred > 0.0 {
@@ -281,10 +304,12 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 lambda = lambda.max(1e-15);
                 nu = 2.0;
                 let reduction = cost - cost_new;
-                let Some((rn, jn)) = problem.residuals_and_jacobian(&un) else {
+                let Some((rn, jn)) = trial_jacobian.or_else(|| problem.residuals_and_jacobian(&un))
+                else {
                     lambda *= 4.0;
                     continue;
                 };
+                // (counted as an evaluation either way: same stopping rules)
                 evaluations += 1;
                 u = un;
                 r = rn;
@@ -361,6 +386,78 @@ mod tests {
             (r.u[0] - 0.5).abs() < 1e-12 && (r.u[1] - 0.25).abs() < 1e-8,
             "{r:?}"
         );
+    }
+
+    /// Rosenbrock asking for the Jacobian with every trial step, and
+    /// counting its evaluations; its Jacobian fails in a band of `u0` that
+    /// an accepted point of the unbounded run lies in (a trial there falls
+    /// back to the residuals alone, and the step is then retried with a
+    /// larger λ, as without the joint evaluation).
+    struct RosenJoint {
+        joint: bool,
+        residual_calls: std::sync::atomic::AtomicUsize,
+        jacobian_calls: std::sync::atomic::AtomicUsize,
+    }
+    impl LeastSquares for RosenJoint {
+        fn n_params(&self) -> usize {
+            2
+        }
+        fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
+            self.residual_calls
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Rosen.residuals(u)
+        }
+        fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+            self.jacobian_calls
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if (0.32..0.33).contains(&u[0]) {
+                return None;
+            }
+            Rosen.residuals_and_jacobian(u)
+        }
+        fn jacobian_with_trials(&self) -> bool {
+            self.joint
+        }
+    }
+
+    /// Evaluating the Jacobian with the trial steps changes no iterate,
+    /// count or stopping rule; it only saves the second evaluation of every
+    /// accepted point.
+    #[test]
+    fn jacobian_with_trials_gives_the_same_iterates() {
+        use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+        let inf = f64::INFINITY;
+        let run = |joint: bool, hi: f64| {
+            let p = RosenJoint {
+                joint,
+                residual_calls: AtomicUsize::new(0),
+                jacobian_calls: AtomicUsize::new(0),
+            };
+            let r = minimise(
+                &p,
+                &[-1.2, 1.0],
+                &[-inf, -inf],
+                &[hi, inf],
+                &LmOptions::default(),
+            )
+            .unwrap();
+            (
+                r,
+                p.residual_calls.load(Relaxed),
+                p.jacobian_calls.load(Relaxed),
+            )
+        };
+        for hi in [inf, 0.5] {
+            let (a, ra, ja) = run(false, hi);
+            let (b, rb, jb) = run(true, hi);
+            assert_eq!(a, b);
+            eprintln!("bound {hi}: separate {ra} residuals + {ja} Jacobians, joint {rb} + {jb}");
+            // joint: a residual call only where the Jacobian failed
+            assert!(rb < ra && ra + ja > rb + jb, "{ra} {ja} {rb} {jb}");
+            if hi == inf {
+                assert!(rb > 0, "the failing band was not visited");
+            }
+        }
     }
 
     #[test]

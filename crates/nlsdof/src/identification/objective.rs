@@ -672,7 +672,7 @@ pub fn branch_response(
                 .iter()
                 .zip(&c.amplitudes)
                 .map(|(&w, &a_meas)| {
-                    let set = r.steady_states(w)?;
+                    let set = r.steady_states_near(w, a_meas)?;
                     let distance = |a: f64| {
                         if a_meas > 0.0 {
                             (a / a_meas).ln().abs()
@@ -1055,6 +1055,11 @@ impl Problem<'_> {
 }
 
 impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
+    /// The sweeps dominate; the derivatives are analytic and cheap.
+    fn jacobian_with_trials(&self) -> bool {
+        true
+    }
+
     fn n_params(&self) -> usize {
         self.free.len()
     }

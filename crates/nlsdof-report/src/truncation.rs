@@ -35,6 +35,11 @@ fn reference_row(st: &TruncationStudy) -> &TruncationRow {
     st.extrapolated.as_ref().unwrap_or(&st.rows[st.reference])
 }
 
+/// The lower H of the extrapolation (the row before the reference).
+fn extrapolated_from(st: &TruncationStudy) -> usize {
+    st.rows[st.reference.saturating_sub(1)].harmonics
+}
+
 fn errors(st: &TruncationStudy, i: usize) -> (Option<f64>, Option<f64>, Vec<Option<f64>>) {
     let r = &st.rows[i];
     let reference = reference_row(st);
@@ -88,7 +93,7 @@ pub fn study_json(req: &StudyRequest, model: &Model, studies: &[(f64, Truncation
                 // Coulomb friction: Richardson extrapolation in H of the
                 // last two rows, the reference of the errors
                 "extrapolated": st.extrapolated.as_ref().map(|r| json!({
-                    "from_harmonics": [st.rows[st.reference.saturating_sub(1)].harmonics, r.harmonics],
+                    "from_harmonics": [extrapolated_from(st), r.harmonics],
                     "peak": r.peak.map(|p| json!({"f_hz": hz(p.0), "amplitude": p.1, "max_abs_x": p.2})),
                     "folds_hz": r.folds.iter().map(|f| hz(f.0)).collect::<Vec<_>>(),
                 })),
@@ -136,7 +141,7 @@ pub fn study_text(req: &StudyRequest, model: &Model, studies: &[(f64, Truncation
             reference.harmonics
         );
         if let Some(x) = &st.extrapolated {
-            let h0 = st.rows[st.reference.saturating_sub(1)].harmonics;
+            let h0 = extrapolated_from(st);
             let peak = x.peak.map_or("no peak".into(), |p| {
                 format!("peak a1 {:.7e} m at {:.8} Hz", p.1, hz(p.0))
             });

@@ -445,6 +445,28 @@ impl ResponseEquation {
         amplitude_bound(self.d0, self.d1, self.eta)
     }
 
+    /// The one root where it is known to be unique (the one-root
+    /// certificate of the stepped-sine fast path):
+    /// [`Self::solve_unique_state`] up to the root bound `ln(1/d₀)` (or
+    /// [`Self::amplitude_bound`] without linear damping; any valid bound
+    /// works, this is the cheapest), from `t_guess` (`ln x`) or, without
+    /// one, from the linear estimate `−½ ln(s₀² + d₀²)`; a start that is
+    /// not finite is replaced by `t = 0`.
+    pub fn solve_certified(&self, t_guess: Option<f64>) -> Option<UniqueState> {
+        let t_max = if self.d0 > 0.0 {
+            -self.d0.ln()
+        } else {
+            self.amplitude_bound().ln()
+        };
+        let guess = t_guess.unwrap_or_else(|| -0.5 * (self.s0 * self.s0 + self.d0 * self.d0).ln());
+        let guess = if guess.is_finite() {
+            guess.min(t_max)
+        } else {
+            0.0f64.min(t_max)
+        };
+        self.solve_unique_state(guess, t_max)
+    }
+
     /// Safeguarded Newton on `ln P(t) = 0` from `t0`, for use where the root
     /// is known to be unique and `ln P` increasing up to `t_max` (with
     /// `ln P > 0` beyond). Returns `None` if it fails to converge.

@@ -352,18 +352,8 @@ impl ForcedResponse {
         check_positive("omega", omega)?;
         let eq = self.equation(omega);
         if certificate::fast_path_possible(self) && certificate::certify_cell(&eq, &eq) {
-            let t_max = if eq.d0 > 0.0 {
-                -eq.d0.ln()
-            } else {
-                eq.amplitude_bound().ln()
-            };
-            let t0 = (guess / self.scale).ln();
-            let t0 = if t0.is_finite() {
-                t0.min(t_max)
-            } else {
-                (-0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln()).min(t_max)
-            };
-            if let Some(u) = eq.solve_unique_state(t0, t_max) {
+            let t_guess = Some((guess / self.scale).ln()).filter(|t| t.is_finite());
+            if let Some(u) = eq.solve_certified(t_guess) {
                 let amplitude = u.t.exp() * self.scale;
                 if amplitude.is_finite() && amplitude > 0.0 {
                     return Ok(RootSet {

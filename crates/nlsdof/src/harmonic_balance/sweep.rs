@@ -156,33 +156,25 @@ fn fast_sweep(
     for (k, &i) in order.iter().enumerate() {
         let eq = &eqs[i];
         let w = omegas[i];
-        // any valid upper bound on the root works; 1/d₀ is the cheapest
-        let t_max = if eq.d0 > 0.0 {
-            -eq.d0.ln()
-        } else {
-            eq.amplitude_bound().ln()
-        };
         let guess = match k {
-            0 => -0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln(),
-            1 => hist[0].1,
+            // the linear estimate
+            0 => None,
+            1 => Some(hist[0].1),
             2 => {
                 let [(w1, t1), (w0, t0), _] = hist;
-                t1 + (t1 - t0) * (w - w1) / (w1 - w0)
+                Some(t1 + (t1 - t0) * (w - w1) / (w1 - w0))
             }
             _ => {
                 // quadratic (Lagrange) extrapolation through the last three steps
                 let [(w2, t2), (w1, t1), (w0, t0)] = hist;
-                t2 * (w - w1) * (w - w0) / ((w2 - w1) * (w2 - w0))
-                    + t1 * (w - w2) * (w - w0) / ((w1 - w2) * (w1 - w0))
-                    + t0 * (w - w2) * (w - w1) / ((w0 - w2) * (w0 - w1))
+                Some(
+                    t2 * (w - w1) * (w - w0) / ((w2 - w1) * (w2 - w0))
+                        + t1 * (w - w2) * (w - w0) / ((w1 - w2) * (w1 - w0))
+                        + t0 * (w - w2) * (w - w1) / ((w0 - w2) * (w0 - w1)),
+                )
             }
         };
-        let guess = if guess.is_finite() {
-            guess.min(t_max)
-        } else {
-            0.0f64.min(t_max)
-        };
-        let UniqueState { t, phase, stable } = eq.solve_unique_state(guess, t_max)?;
+        let UniqueState { t, phase, stable } = eq.solve_certified(guess)?;
         points.push(SweepPoint {
             omega: w,
             amplitude: t.exp() * r.scale,
@@ -294,21 +286,8 @@ fn unique_root(
     omega: f64,
     prev_x: Option<f64>,
 ) -> Option<SweepPoint> {
-    let t_max = if eq.d0 > 0.0 {
-        -eq.d0.ln()
-    } else {
-        eq.amplitude_bound().ln()
-    };
-    let guess = match prev_x {
-        Some(x) if x > 0.0 => x.ln(),
-        _ => -0.5 * (eq.s0 * eq.s0 + eq.d0 * eq.d0).ln(),
-    };
-    let guess = if guess.is_finite() {
-        guess.min(t_max)
-    } else {
-        0.0f64.min(t_max)
-    };
-    let UniqueState { t, phase, stable } = eq.solve_unique_state(guess, t_max)?;
+    let guess = prev_x.filter(|&x| x > 0.0).map(f64::ln);
+    let UniqueState { t, phase, stable } = eq.solve_certified(guess)?;
     let amplitude = t.exp() * r.scale;
     (stable && amplitude.is_finite() && amplitude > 0.0).then_some(SweepPoint {
         omega,

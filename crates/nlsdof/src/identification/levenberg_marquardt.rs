@@ -281,19 +281,15 @@ pub fn minimise<P: LeastSquares + ?Sized>(
             // with the Jacobian when the problem asks for it (kept below if
             // the step is accepted); residuals alone if that fails, so that
             // the iterates do not depend on the choice
-            let mut trial_jacobian = None;
-            let trial = if problem.jacobian_with_trials() {
-                match problem.residuals_and_jacobian(&un) {
-                    Some((rn, jn)) => {
-                        trial_jacobian = Some((rn.clone(), jn));
-                        Some(rn)
-                    }
-                    None => problem.residuals(&un),
-                }
-            } else {
-                problem.residuals(&un)
-            };
-            let cost_new = trial.as_ref().map(|t| sum_sq(t)).unwrap_or(f64::INFINITY);
+            let joint = problem
+                .jacobian_with_trials()
+                .then(|| problem.residuals_and_jacobian(&un))
+                .flatten();
+            let cost_new = match &joint {
+                Some((rn, _)) => Some(sum_sq(rn)),
+                None => problem.residuals(&un).map(|t| sum_sq(&t)),
+            }
+            .unwrap_or(f64::INFINITY);
             if cost_new < cost {
                 let rho = if pred > 0.0 {
                     (cost - cost_new) / pred
@@ -304,8 +300,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 lambda = lambda.max(1e-15);
                 nu = 2.0;
                 let reduction = cost - cost_new;
-                let Some((rn, jn)) = trial_jacobian.or_else(|| problem.residuals_and_jacobian(&un))
-                else {
+                let Some((rn, jn)) = joint.or_else(|| problem.residuals_and_jacobian(&un)) else {
                     lambda *= 4.0;
                     continue;
                 };

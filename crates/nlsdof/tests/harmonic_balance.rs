@@ -364,7 +364,19 @@ fn branch_following_does_not_depend_on_step_size() {
     for dir in [SweepDirection::Up, SweepDirection::Down] {
         let coarse = r.sweep(&grid(11), dir).unwrap();
         let fine = r.sweep(&grid(1001), dir).unwrap();
-        assert_eq!(coarse.jumps, fine.jumps);
+        // the same jumps; a sweep searches its folds on its own steps, so
+        // they are located from different brackets: equal to the fold
+        // location's precision (~1e-14), not bit for bit
+        assert_eq!(coarse.jumps.len(), fine.jumps.len());
+        for (c, f) in coarse.jumps.iter().zip(&fine.jumps) {
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-13 * a.abs();
+            assert!(
+                close(c.omega, f.omega)
+                    && close(c.amplitude_before, f.amplitude_before)
+                    && close(c.amplitude_after, f.amplitude_after),
+                "{c:?} vs {f:?}"
+            );
+        }
         for p in &coarse.points {
             let q = fine
                 .points

@@ -184,7 +184,7 @@ impl ResponseEquation {
 
     /// Sign-equivalent of `d/dt [e^{−e_min t}(P − 1)] ∝ P′(t) − e_min (P − 1)`,
     /// divided by `max(P, 1)` so it never overflows.
-    fn level1(&self, t: f64, e_min: f64) -> f64 {
+    pub(crate) fn level1(&self, t: f64, e_min: f64) -> f64 {
         let (lp, slope) = self.ln_p_and_slope(t);
         if lp > 0.0 {
             slope + e_min * ((-lp).exp() - 1.0)
@@ -276,6 +276,7 @@ impl ResponseEquation {
         let roots = ps.roots_with_levels_in(lo, hi, Some(&top), Some(&second), &mut levels);
         let [crit, infl] = levels;
         Ok(FoldIndicators {
+            e_min,
             roots: roots.into_iter().map(|t| t + u).collect(),
             critical: crit
                 .into_iter()
@@ -495,6 +496,9 @@ pub struct FoldIndicators {
     pub critical: Vec<(f64, f64)>,
     /// `(t, slope)` at each inflection point.
     pub inflection: Vec<(f64, f64)>,
+    /// The smallest exponent `e_min` of the expanded `P − 1`: the slope at
+    /// an inflection point is that of `e^{−e_min t}(P − 1)`.
+    pub e_min: f64,
 }
 
 /// `ln(s² + d²)` without overflow.

@@ -312,10 +312,22 @@ impl ForcedResponse {
     pub fn steady_states(&self, omega: f64) -> Result<RootSet, SolveError> {
         check_positive("omega", omega)?;
         let eq = self.equation(omega);
-        let xs = eq.roots().map_err(|e| folds::with_omega(e, omega))?;
-        let roots: Vec<SteadyState> = xs
+        let ts = eq.roots_t().map_err(|e| folds::with_omega(e, omega))?;
+        self.root_set(omega, &eq, &ts)
+    }
+
+    /// The steady states at `omega` from the roots `t = ln x` of its
+    /// equation `eq` (increasing): amplitude, phase and stability of each.
+    pub(crate) fn root_set(
+        &self,
+        omega: f64,
+        eq: &ResponseEquation,
+        ts: &[f64],
+    ) -> Result<RootSet, SolveError> {
+        let roots: Vec<SteadyState> = ts
             .iter()
-            .map(|&x| {
+            .map(|&t| {
+                let x = t.exp();
                 let (phase, stable) = eq.phase_and_stability(x);
                 SteadyState {
                     amplitude: x * self.scale,
@@ -333,7 +345,7 @@ impl ForcedResponse {
                 omega,
             });
         }
-        let no_motion = roots.is_empty().then(|| self.no_motion_reason(&eq));
+        let no_motion = roots.is_empty().then(|| self.no_motion_reason(eq));
         Ok(RootSet {
             omega,
             roots,

@@ -223,10 +223,12 @@ pub struct FitPlan {
     pub seed: u64,
     pub lm: LmOptions,
     /// Largest number of points used for the landscape (a regular subsample
-    /// of longer data).
+    /// of longer data; with more than `landscape_points /`
+    /// [`SUBSAMPLE_POINTS_PER_LEVEL`] levels, that many levels first).
     pub landscape_points: usize,
     /// Largest number of points of the candidates' output-error fits (a
-    /// regular subsample of longer data, every curve's end points kept); the
+    /// regular subsample of longer data, every curve's end points kept,
+    /// thinned by level first as for `landscape_points`); the
     /// winner is then refined on all points (data of at most
     /// [`POLISH_MAX_POINTS`], at most [`POLISH_ITERATIONS`] LM iterations,
     /// kept when that converges) and judged (cost, residuals, intervals) on
@@ -384,15 +386,45 @@ pub struct Identification {
     pub candidates: Vec<Candidate>,
 }
 
+/// Fewest points per level a subsample aims to keep: data with more levels
+/// than `max / SUBSAMPLE_POINTS_PER_LEVEL` are thinned by level first.
+pub const SUBSAMPLE_POINTS_PER_LEVEL: usize = 20;
+
 /// Regular subsample of at most `max` points per data set (all if smaller),
-/// keeping every curve's first and last point.
+/// keeping every curve's first and last point. Data with more levels than
+/// `max / SUBSAMPLE_POINTS_PER_LEVEL` (at least 2) keep that many levels,
+/// evenly spaced in the order the levels first appear (the first and last
+/// kept; every curve of a kept level, up and down alike), so that each kept
+/// curve still has points between its ends: without it, 5000 levels of 200
+/// steps kept only their two end points each, more than 10,000 points whose
+/// every curve still needed a fold search at each evaluation (a nonlinear
+/// set of that shape did not finish in 7 min). Sets of up to 75 levels (the
+/// default 1500 points) are not thinned by level.
 fn subsample(data: &Dataset, max: usize) -> Dataset {
     let n = data.len();
     if n <= max || max == 0 {
         return data.clone();
     }
-    let stride = n.div_ceil(max);
+    let mut seen = std::collections::HashSet::new();
+    let levels: Vec<&str> = data
+        .curves
+        .iter()
+        .map(|c| c.level.as_str())
+        .filter(|l| seen.insert(*l))
+        .collect();
+    let cap = (max / SUBSAMPLE_POINTS_PER_LEVEL).max(2);
     let mut out = data.clone();
+    if levels.len() > cap {
+        let kept: std::collections::HashSet<&str> = (0..cap)
+            .map(|k| levels[(k * (levels.len() - 1) + (cap - 1) / 2) / (cap - 1)])
+            .collect();
+        out.curves.retain(|c| kept.contains(c.level.as_str()));
+    }
+    let n = out.len();
+    if n <= max {
+        return out;
+    }
+    let stride = n.div_ceil(max);
     for c in &mut out.curves {
         let m = c.omegas.len();
         let keep: Vec<usize> = (0..m).filter(|&i| i % stride == 0 || i + 1 == m).collect();
@@ -970,5 +1002,58 @@ fn start_from(spec: &mut FitSpec, ee: &EquationErrorFit, integer: bool) {
                 spec.start[j] = ee.theta[j];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identification::Curve;
+    use crate::SweepDirection;
+
+    fn levels(n_levels: usize, steps: usize) -> Dataset {
+        let mut curves = Vec::new();
+        for l in 0..n_levels {
+            for direction in [SweepDirection::Up, SweepDirection::Down] {
+                curves.push(Curve {
+                    level: format!("L{l}"),
+                    gamma: 0.1 + l as f64,
+                    direction,
+                    omegas: (0..steps).map(|i| 50.0 + i as f64).collect(),
+                    amplitudes: vec![1e-3; steps],
+                    phases: None,
+                    weights: vec![1.0; steps],
+                });
+            }
+        }
+        Dataset { curves }
+    }
+
+    /// Many levels are thinned by level (evenly, the extreme levels and
+    /// both directions of each kept level kept), so that every kept curve
+    /// keeps points between its ends; few levels are only thinned by point.
+    #[test]
+    fn subsample_thins_many_levels_by_level_first() {
+        let data = levels(2500, 200);
+        let sub = subsample(&data, 1500);
+        let cap = 1500 / SUBSAMPLE_POINTS_PER_LEVEL;
+        assert_eq!(sub.curves.len(), 2 * cap);
+        assert!(sub.len() <= 1500 + 2 * sub.curves.len(), "{}", sub.len());
+        assert_eq!(sub.curves[0].level, "L0");
+        assert_eq!(sub.curves[sub.curves.len() - 1].level, "L2499");
+        for pair in sub.curves.chunks(2) {
+            assert_eq!(pair[0].level, pair[1].level);
+            assert_ne!(pair[0].direction, pair[1].direction);
+        }
+        for c in &sub.curves {
+            assert!(c.omegas.len() >= 10, "{} points", c.omegas.len());
+            assert_eq!(c.omegas[0], 50.0);
+            assert_eq!(c.omegas[c.omegas.len() - 1], 249.0);
+        }
+        // 18 levels (the cantilever's count): every level kept
+        let data = levels(18, 1024);
+        let sub = subsample(&data, 1500);
+        assert_eq!(sub.curves.len(), 36);
+        assert!(sub.len() <= 1500 + 36);
     }
 }

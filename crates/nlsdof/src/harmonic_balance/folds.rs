@@ -640,6 +640,28 @@ mod tests {
         pub(super) static BY_VALUE: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
     }
 
+    /// A random model of the fold tests: `ω_n = wn`, ζ 1e-3 … 3e-2,
+    /// hardening (softening every fourth case), ρ 0.5 … 4.5, no nonlinear
+    /// damping in 30 % of cases, η −0.9 … 3.1 (Coulomb friction every fifth).
+    fn random_model(rnd: &mut impl FnMut() -> f64, case: usize, wn: f64) -> NormalisedModel {
+        NormalisedModel {
+            alpha: wn * wn,
+            delta: 2.0 * wn * 10f64.powf(-3.0 + 1.5 * rnd()),
+            beta: if case % 4 == 3 { -1.0 } else { 1.0 } * 10f64.powf(-1.0 + 3.0 * rnd()),
+            rho: 0.5 + 4.0 * rnd(),
+            kappa: if rnd() < 0.3 {
+                0.0
+            } else {
+                10f64.powf(-4.0 + 3.0 * rnd())
+            },
+            eta: if case % 5 == 0 {
+                -1.0
+            } else {
+                -0.9 + 4.0 * rnd()
+            },
+        }
+    }
+
     /// Narrow hysteresis windows just above the cusp, against an exact-count
     /// oracle: for random hardening and softening models (η down to Coulomb
     /// friction) the level where three roots first appear within ±3 % of
@@ -657,23 +679,7 @@ mod tests {
         let (mut levels, mut changes, mut missed) = (0, 0, Vec::new());
         for case in 0..40 {
             let wn = 10.0;
-            let softening = case % 4 == 3;
-            let model = NormalisedModel {
-                alpha: wn * wn,
-                delta: 2.0 * wn * 10f64.powf(-3.0 + 1.5 * rnd()),
-                beta: if softening { -1.0 } else { 1.0 } * 10f64.powf(-1.0 + 3.0 * rnd()),
-                rho: 0.5 + 4.0 * rnd(),
-                kappa: if rnd() < 0.3 {
-                    0.0
-                } else {
-                    10f64.powf(-4.0 + 3.0 * rnd())
-                },
-                eta: if case % 5 == 0 {
-                    -1.0
-                } else {
-                    -0.9 + 4.0 * rnd()
-                },
-            };
+            let model = random_model(&mut rnd, case, wn);
             let response = |g: f64| {
                 ForcedResponse::from_normalised(&model, g, Formulation::HarmonicBalance).ok()
             };
@@ -761,22 +767,7 @@ mod tests {
         let (mut folds, mut shared) = (0, 0);
         for case in 0..200 {
             let wn = 10.0;
-            let model = NormalisedModel {
-                alpha: wn * wn,
-                delta: 2.0 * wn * 10f64.powf(-3.0 + 1.5 * rnd()),
-                beta: if case % 4 == 3 { -1.0 } else { 1.0 } * 10f64.powf(-1.0 + 3.0 * rnd()),
-                rho: 0.5 + 4.0 * rnd(),
-                kappa: if rnd() < 0.3 {
-                    0.0
-                } else {
-                    10f64.powf(-4.0 + 3.0 * rnd())
-                },
-                eta: if case % 5 == 0 {
-                    -1.0
-                } else {
-                    -0.9 + 4.0 * rnd()
-                },
-            };
+            let model = random_model(&mut rnd, case, wn);
             let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
             let Ok(r) =
                 ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance)

@@ -654,10 +654,9 @@ mod tests {
             } else {
                 10f64.powf(-4.0 + 3.0 * rnd())
             },
-            eta: if case % 5 == 0 {
-                -1.0
-            } else {
-                -0.9 + 4.0 * rnd()
+            eta: match case % 5 {
+                0 => -1.0,
+                _ => -0.9 + 4.0 * rnd(),
             },
         }
     }

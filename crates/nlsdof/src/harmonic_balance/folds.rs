@@ -171,9 +171,10 @@ pub(crate) fn with_omega(e: SolveError, omega: f64) -> SolveError {
 /// - Critical values present at both ends: [`may_cross_twice`].
 /// - A pair of critical points born or dying inside the cell (their number
 ///   differs at the ends): refined when a critical value at either end is
-///   within 4× its change across the cell of zero. A newborn value moves
-///   away from its birth value monotonically, and crossing zero once
-///   changes the root count, so far from zero no fold can hide.
+///   within 4× its change across the cell of zero. The premise: a newborn
+///   pair's values move apart from their birth value without turning
+///   inside one cell, and a single crossing of zero changes the root
+///   count, so far from zero no fold hides (the cusp test checks it).
 /// - Inflection points (where pairs of critical points are born): their
 ///   slopes as the critical values, or their number differing, count only
 ///   where `ln P` at the inflection point — the value a newborn pair starts

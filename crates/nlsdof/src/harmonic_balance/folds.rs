@@ -67,7 +67,7 @@ pub const REFINE_BUDGET: usize = 2 * GRID;
 struct Sample {
     omega: f64,
     count: usize,
-    /// The roots `t = ln x`, increasing.
+    /// The roots `t = ln x`, increasing (moved out by [`search`]).
     roots: Vec<f64>,
     /// (t, ln P) at each critical point.
     crit: Vec<(f64, f64)>,
@@ -524,16 +524,17 @@ fn search(
             prev = None;
             continue;
         }
+        // the roots move out of the samples (`locate` needs only counts)
         let a = match prev.take() {
             Some(s) => s,
             None => {
-                let s = sample(r, grid[i - 1])?;
-                roots[i - 1] = Some(s.roots.clone());
+                let mut s = sample(r, grid[i - 1])?;
+                roots[i - 1] = Some(std::mem::take(&mut s.roots));
                 s
             }
         };
-        let b = sample(r, grid[i])?;
-        roots[i] = Some(b.roots.clone());
+        let mut b = sample(r, grid[i])?;
+        roots[i] = Some(std::mem::take(&mut b.roots));
         locate(r, &a, &b, 0, &mut budget, locator, &mut out)?;
         prev = Some(b);
     }

@@ -280,42 +280,34 @@ impl Curve {
     /// carry the fit.
     pub fn measured_jump(&self, min_ratio: f64) -> Option<f64> {
         let n = self.omegas.len();
-        let mut best: Option<(f64, usize)> = None;
-        for i in 0..n - 1 {
-            let (from, to) = match self.direction {
-                SweepDirection::Up => (i, i + 1),
-                SweepDirection::Down => (i + 1, i),
-            };
-            let (a, b) = (self.amplitudes[from], self.amplitudes[to]);
-            if a <= 0.0 || b <= 0.0 {
-                continue;
-            }
-            let ratio = (a / b).max(b / a);
-            if ratio > min_ratio && best.map_or(true, |(r, _)| ratio > r) {
-                best = Some((ratio, from));
+        // every step in sweep order: (index it starts from, rises, ratio)
+        let steps: Vec<(usize, bool, f64)> = (0..n - 1)
+            .filter_map(|i| {
+                let (from, to) = match self.direction {
+                    SweepDirection::Up => (i, i + 1),
+                    SweepDirection::Down => (i + 1, i),
+                };
+                let (a, b) = (self.amplitudes[from], self.amplitudes[to]);
+                (a > 0.0 && b > 0.0).then(|| (from, b > a, (a / b).max(b / a)))
+            })
+            .collect();
+        let mut best: Option<(f64, usize, bool)> = None;
+        for &(from, rises, ratio) in &steps {
+            if ratio > min_ratio && best.map_or(true, |(r, _, _)| ratio > r) {
+                best = Some((ratio, from, rises));
             }
         }
-        let (ratio, from) = best?;
+        let (ratio, from, jump_rises) = best?;
         // A jump stands out from the changes the other way along the curve
         // (the rise into a jump-down, the fall after a jump-up), compared
         // in ln(ratio). On steps too coarse for the resonance the rise into
         // the peak and the fall after it are alike, and no step can be told
         // apart as the jump; the steep approach to a fold runs the same way
         // as the jump and does not count against it.
-        let (p, q) = match self.direction {
-            SweepDirection::Up => (from, from + 1),
-            SweepDirection::Down => (from, from - 1),
-        };
-        let jump_rises = self.amplitudes[q] > self.amplitudes[p];
-        let other_way = (0..n - 1)
-            .filter_map(|i| {
-                let (a, b) = match self.direction {
-                    SweepDirection::Up => (self.amplitudes[i], self.amplitudes[i + 1]),
-                    SweepDirection::Down => (self.amplitudes[i + 1], self.amplitudes[i]),
-                };
-                // a → b in sweep order, against the jump's direction
-                (a > 0.0 && b > 0.0 && (b > a) != jump_rises).then(|| (a / b).max(b / a))
-            })
+        let other_way = steps
+            .iter()
+            .filter(|&&(_, rises, _)| rises != jump_rises)
+            .map(|&(_, _, r)| r)
             .fold(1.0f64, f64::max);
         (ratio.ln() >= DISTINCT_JUMP * other_way.ln()).then(|| self.omegas[from])
     }

@@ -413,13 +413,21 @@ fn subsample(data: &Dataset, max: usize) -> Dataset {
         .filter(|l| seen.insert(*l))
         .collect();
     let cap = (max / SUBSAMPLE_POINTS_PER_LEVEL).max(2);
-    let mut out = data.clone();
-    if levels.len() > cap {
+    let mut out = if levels.len() > cap {
         let kept: std::collections::HashSet<&str> = (0..cap)
             .map(|k| levels[(k * (levels.len() - 1) + (cap - 1) / 2) / (cap - 1)])
             .collect();
-        out.curves.retain(|c| kept.contains(c.level.as_str()));
-    }
+        Dataset {
+            curves: data
+                .curves
+                .iter()
+                .filter(|c| kept.contains(c.level.as_str()))
+                .cloned()
+                .collect(),
+        }
+    } else {
+        data.clone()
+    };
     let n = out.len();
     if n <= max {
         return out;

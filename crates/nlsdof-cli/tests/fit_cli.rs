@@ -137,7 +137,10 @@ fn fit_errors_are_one_line_and_leave_no_file() {
     for (extra, want) in [
         (&["--jump-weight=-1"][..], "--jump-weight -1"),
         (&["--jump-weight", "NaN"][..], "--jump-weight NaN"),
-        (&["--jump-weight", "1", "--integer"][..], "--integer"),
+        (
+            &["--model", "duffing", "--integer"][..],
+            "--integer: the duffing model has no free exponent",
+        ),
     ] {
         let o = Command::cargo_bin("nlsdof")
             .unwrap()
@@ -156,9 +159,9 @@ fn fit_errors_are_one_line_and_leave_no_file() {
     }
 }
 
-/// `--jump-weight` on data with a jump: the fit runs, reports the weight,
-/// and the jump-weighted optimum cannot have a lower Eq 31 cost than the
-/// plain fit from the same single start (it trades Eq 31 for the jump).
+/// `--jump-weight` and `--jump-reading` on data with a jump: the fit runs
+/// and reports the weight (default 1) and each curve's reading, and on exact
+/// data every setting finds the truth (Eq 31 cost at rounding level).
 #[test]
 fn jump_weight_option_runs_and_is_reported() {
     let dir = tempfile::tempdir().unwrap();
@@ -166,15 +169,7 @@ fn jump_weight_option_runs_and_is_reported() {
     let run = |extra: &[&str]| -> serde_json::Value {
         let o = Command::cargo_bin("nlsdof")
             .unwrap()
-            .args([
-                "fit",
-                csv.to_str().unwrap(),
-                "--model",
-                "duffing",
-                "--starts",
-                "1",
-                "--json",
-            ])
+            .args(["fit", csv.to_str().unwrap(), "--model", "duffing", "--json"])
             .args(extra)
             .output()
             .unwrap();
@@ -182,14 +177,22 @@ fn jump_weight_option_runs_and_is_reported() {
         serde_json::from_slice(&o.stdout).unwrap()
     };
     let plain = run(&[]);
-    let jumped = run(&["--jump-weight", "10"]);
-    assert_eq!(plain["jump_weight"], 0.0);
-    assert_eq!(jumped["jump_weight"], 10.0);
-    let (c0, c1) = (
-        plain["cost"].as_f64().unwrap(),
-        jumped["cost"].as_f64().unwrap(),
-    );
-    assert!(c1.is_finite() && c1 >= c0 * (1.0 - 1e-9), "{c0} {c1}");
+    let weighted = run(&["--jump-weight", "10"]);
+    let none = run(&["--jump-weight", "0"]);
+    let censored = run(&["--jump-reading", "censored"]);
+    assert_eq!(plain["jump_weight"], 1.0);
+    assert_eq!(weighted["jump_weight"], 10.0);
+    assert_eq!(none["jump_weight"], 0.0);
+    for v in [&plain, &weighted, &none, &censored] {
+        let c = v["cost"].as_f64().unwrap();
+        assert!(c < 1e-20, "{c}");
+    }
+    for l in plain["levels"].as_array().unwrap() {
+        assert_eq!(l["jump_reading"], "exact");
+    }
+    for l in censored["levels"].as_array().unwrap() {
+        assert_eq!(l["jump_reading"], "censored");
+    }
 }
 
 #[test]
@@ -460,8 +463,9 @@ fn staged_fit_reports_and_landscape() {
     assert!(!out.exists());
 }
 
-/// A fit that stops on max-iterations says so on its first line and shows
-/// no intervals.
+/// A fit that cannot reach the data (the stiffness exponent boxed away
+/// from the truth) says so on its first lines — the model does not fit, a
+/// parameter sits at its bound — and shows no intervals.
 #[test]
 fn unconverged_fit_says_so_first() {
     let dir = tempfile::tempdir().unwrap();
@@ -488,9 +492,14 @@ fn unconverged_fit_says_so_first() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
-    let first = text.lines().next().unwrap();
+    let mut lines = text.lines();
+    let (first, second) = (lines.next().unwrap(), lines.next().unwrap());
     assert!(
-        first.starts_with("WARNING:") && first.contains("rho"),
+        first.starts_with("WARNING: the model does not fit"),
+        "{text}"
+    );
+    assert!(
+        second.starts_with("WARNING:") && second.contains("at bounds: rho"),
         "{text}"
     );
     assert!(text.contains("intervals: not shown"), "{text}");

@@ -494,11 +494,18 @@ impl FitResult {
     fn converged(&self) -> bool {
         self.id.fit.converged
     }
-    /// Why the fit is not to be trusted (not converged, at a bound, not
-    /// identifiable), or None.
+    /// Why the fit is not to be trusted (the model does not fit the noise,
+    /// not converged, at a bound, not identifiable, a ridge), or None: the
+    /// first lines of the CLI's report.
     #[getter]
     fn warning(&self) -> Option<String> {
-        self.id.fit.warning()
+        self.id.warning()
+    }
+    /// Whether the model fits every curve to within its noise (the
+    /// self-check; `to_dict()["adequacy"]` has the details).
+    #[getter]
+    fn adequate(&self) -> bool {
+        self.id.adequacy.adequate
     }
     /// The distinct local minima: list of {"cost", "count", "termination",
     /// "theta"}.

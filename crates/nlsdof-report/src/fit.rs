@@ -86,21 +86,193 @@ pub fn identification_document(
     mass: Option<f64>,
 ) -> Result<Value, ReportError> {
     let mut v = result_json(&id.data, &id.fit, mass)?;
+    v["warning"] = json!(id.warning());
+    v["notes"] = json!(id.fit.notes());
+    v["adequacy"] = adequacy_json(id);
+    v["levels"] = Value::Array(curves_json(id));
     v["jump_weight"] = json!(id.jump_weight);
+    if !id.sign_trials.is_empty() {
+        if let Some(t) = sign_trials_json(&id.sign_trials) {
+            v["sign_auto"] = t;
+        }
+    }
     v["identification"] = identification_json(id);
     Ok(v)
 }
 
-/// The text report of a staged fit: the fit's report (its first line is
-/// the warning, if any), then the stages that led to it.
+/// The self-check against the noise as JSON: `adequate`, the residual in
+/// units of the noise over all points, the curves that do not fit, the
+/// thresholds and what was tried.
+pub fn adequacy_json(id: &Identification) -> Value {
+    use nlsdof::identification::identify::{ADEQUACY_ALL, ADEQUACY_CURVE};
+    let a = &id.adequacy;
+    json!({
+        "adequate": a.adequate,
+        "residual_over_noise": a.ratio,
+        "failing_levels": a.failing.iter().map(|&i| {
+            let c = &id.curves[i];
+            json!({"level": c.level, "sweep": dir_name(c.direction), "residual_over_noise": c.noise.ratio()})
+        }).collect::<Vec<_>>(),
+        "message": id.adequacy_message(),
+        "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL,
+                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2"},
+        "escalation": a.escalation,
+    })
+}
+
+fn dir_name(d: SweepDirection) -> &'static str {
+    if d == SweepDirection::Up {
+        "up"
+    } else {
+        "down"
+    }
+}
+
+/// Per-curve JSON of a staged fit: RMS, jump reading, measured and model
+/// jump, whether the sweep left its branch early and by how much, the
+/// residual against the noise, the upper-branch RMS and the peaks.
+pub fn curves_json(id: &Identification) -> Vec<Value> {
+    id.fit
+        .levels
+        .iter()
+        .zip(&id.curves)
+        .map(|(l, c)| {
+            json!({
+                "level": l.level, "gamma": l.gamma, "sweep": dir_name(l.direction),
+                "points": l.points, "rms": l.rms, "rms_normalised": l.rms_normalised,
+                "jump_reading": c.reading.name(),
+                "measured_jump_f_hz": c.measured_jump.map(hz),
+                "measured_jump_next_f_hz": c.measured_jump_next.map(hz),
+                "model_jump_f_hz": c.model_jump.map(hz),
+                "left_early": c.left_early_by.is_some(),
+                "left_early_by_hz": c.left_early_by.map(hz),
+                "residual_over_noise": c.noise.ratio(),
+                "noise_rms": c.noise.noise_rms,
+                "upper_branch_rms": c.upper_branch_rms,
+                "peak_measured": c.peak.0, "peak_model": c.peak.1,
+            })
+        })
+        .collect()
+}
+
+/// The text report of a staged fit: the first lines say whether the model
+/// fits the noise and whether the fit is to be trusted (nothing when it
+/// is), then results worth a line (natural bounds, vanished terms), the
+/// fit, the per-level table and the stages that led to it.
 pub fn identification_report(
     id: &Identification,
     mass: Option<f64>,
 ) -> Result<String, ReportError> {
-    let mut s = result_text(&id.data, &id.fit, mass)?;
+    let mut s = String::new();
+    if let Some(w) = id.warning() {
+        writeln!(s, "{w}").ok();
+    }
+    for n in id.fit.notes() {
+        writeln!(s, "note: {n}").ok();
+    }
+    if !id.sign_trials.is_empty() {
+        let chosen = if id.fit.theta[BETA] < 0.0 {
+            Sign::Softening
+        } else {
+            Sign::Hardening
+        };
+        s.push_str(&sign_trials_text(&id.sign_trials, chosen));
+    }
+    result_text_body(&mut s, &id.data, &id.fit, mass)?;
+    s.push_str(&curves_text(id));
+    s.push_str(&pq_text(&id.data, &id.fit)?);
+    minima_text(&mut s, &id.fit.minima, &id.fit.status);
     s.push('\n');
     s.push_str(&identification_text(id));
     Ok(s)
+}
+
+/// `--integer`: every integer node of the landscape (equation-error cost)
+/// with the output-error objective of the nodes that were fitted.
+pub fn integer_nodes_json(id: &Identification) -> Value {
+    let l = &id.landscape;
+    let mut rows = Vec::new();
+    for (j, &eta) in l.eta.iter().enumerate() {
+        for (i, &rho) in l.rho.iter().enumerate() {
+            let fitted = id
+                .candidates
+                .iter()
+                .find(|c| c.rho == rho && c.eta == eta)
+                .and_then(|c| c.oe.as_ref().ok().copied());
+            rows.push(json!({"rho": rho, "eta": eta, "ee_cost": l.at(i, j), "objective": fitted}));
+        }
+    }
+    Value::Array(rows)
+}
+
+/// `--integer` table as text: the fitted nodes first (lowest objective
+/// first), then the equation-error cost of the others.
+pub fn integer_nodes_text(id: &Identification) -> String {
+    let mut s = String::new();
+    let mut fitted: Vec<_> = id
+        .candidates
+        .iter()
+        .filter_map(|c| c.oe.as_ref().ok().map(|o| (c.rho, c.eta, c.ee_cost, *o)))
+        .collect();
+    fitted.sort_by(|a, b| a.3.total_cmp(&b.3));
+    writeln!(
+        s,
+        "\ninteger exponents: {} nodes in the landscape, {} fitted by output error",
+        id.landscape.rho.len() * id.landscape.eta.len(),
+        fitted.len()
+    )
+    .ok();
+    writeln!(
+        s,
+        "  {:>5} {:>5} {:>14} {:>14}",
+        "rho", "eta", "ee cost", "objective"
+    )
+    .ok();
+    for (r, e, ee, o) in &fitted {
+        writeln!(s, "  {r:>5} {e:>5} {ee:>14.6e} {o:>14.6e}").ok();
+    }
+    s
+}
+
+/// The per-level table of a staged fit (text).
+pub fn curves_text(id: &Identification) -> String {
+    let mut s = String::new();
+    writeln!(
+        s,
+        "\nper level: {:<10} {:>5} {:>8} {:>12} {:>13} {:>13} {:>12} {:>10} {:>12} {:>12} {:>12}",
+        "level",
+        "sweep",
+        "reading",
+        "RMS [m]",
+        "jump meas[Hz]",
+        "jump model",
+        "early by[Hz]",
+        "res/noise",
+        "upper RMS",
+        "peak meas",
+        "peak model"
+    )
+    .ok();
+    let f = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |x| format!("{x:.p$}"));
+    for (l, c) in id.fit.levels.iter().zip(&id.curves) {
+        writeln!(
+            s,
+            "           {:<10} {:>5} {:>8} {:>12.4e} {:>13} {:>13} {:>12} {:>10.2} {:>12} {:>12.4e} {:>12.4e}",
+            l.level,
+            dir_name(l.direction),
+            c.reading.name(),
+            l.rms,
+            f(c.measured_jump.map(hz), 3),
+            f(c.model_jump.map(hz), 3),
+            f(c.left_early_by.map(hz), 3),
+            c.noise.ratio(),
+            c.upper_branch_rms.map_or("-".to_string(), |v| format!("{v:.4e}")),
+            c.peak.0,
+            c.peak.1,
+        )
+        .ok();
+    }
+    s
 }
 
 /// JSON of output-error profile intervals (`fit --profile`): name ->
@@ -162,7 +334,10 @@ pub fn identification_json(id: &Identification) -> Value {
         "phase_convention": id.phase.map(|p| json!({
             "sign": if p.sign > 0.0 { "lag" } else { "lead" },
             "offset_deg": p.offset.to_degrees(), "delay_s": p.delay})),
-        "gain_test": id.gain_test.map(|g| json!({"gain": g.gain, "f_statistic": g.f_statistic, "freed": g.freed})),
+        "gain_test": id.gain_test.map(|g| json!({"equation_error_gain": g.gain, "equation_error_f": g.f_statistic, "freed": g.freed,
+            "output_error": g.output_error.map(|o| json!({"held_objective": o.held, "free_objective": o.free, "free_gain": o.gain,
+                "f_statistic": o.f_statistic, "at_bound": o.at_bound})),
+            "note": "the equation-error test (biased by errors in variables) only chooses the starts; the output-error F test decides: freed when F > 10.83"})),
         "jump_weight": id.jump_weight,
         "candidates": id.candidates.iter().map(|c| json!({
             "rho": c.rho, "eta": c.eta, "ee_cost": c.ee_cost, "sign": c.sign.name(),
@@ -204,19 +379,37 @@ pub fn identification_text(id: &Identification) -> String {
         .ok();
     }
     if let Some(g) = id.gain_test {
-        writeln!(
-            s,
-            "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {})",
-            if g.freed { "free" } else { "held at 1" },
-            g.gain,
-            g.f_statistic,
-            nlsdof::identification::identify::GAIN_F_THRESHOLD
-        )
+        let t = nlsdof::identification::identify::GAIN_F_THRESHOLD;
+        match g.output_error {
+            Some(o) => writeln!(
+                s,
+                "gain: {} (output error: free gain {:.4}, F = {:.3e}, freed when F > {t}{}; equation-error screen {:.4}, F = {:.3e})",
+                if g.freed { "free" } else { "held at 1" },
+                o.gain,
+                o.f_statistic,
+                if o.at_bound { ", but the free gain sits at a bound" } else { "" },
+                g.gain,
+                g.f_statistic,
+            ),
+            None => writeln!(
+                s,
+                "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {t})",
+                if g.freed { "free" } else { "held at 1" },
+                g.gain,
+                g.f_statistic,
+            ),
+        }
         .ok();
     }
-    if id.jump_weight > 0.0 {
-        writeln!(s, "jump residuals: lambda = {}", id.jump_weight).ok();
-    }
+    let censored = id.spec.censored.iter().filter(|&&c| c).count();
+    writeln!(
+        s,
+        "jumps: weight {} ({} of {} curves read as censored: the sweep may leave its branch before the fold)",
+        id.jump_weight,
+        censored,
+        id.data.curves.len()
+    )
+    .ok();
     let f = |p: Option<nlsdof::identification::landscape::ProfileInterval>| {
         p.map(|p| {
             format!(
@@ -392,6 +585,12 @@ pub fn result_json(
         "unidentifiable": res.unidentifiable,
         "intervals_valid": valid,
         "warning": res.warning(),
+        "notes": res.notes(),
+        "ridges": res.ridges.iter().map(|r| json!({"parameters": [r.first, r.second], "correlation": r.correlation, "remedy": r.remedy()})).collect::<Vec<_>>(),
+        "crossings": res.crossings.iter().map(|c| json!({"parameter": c.name, "bound": c.bound})).collect::<Vec<_>>(),
+        "natural_bounds": res.natural.iter().map(|n| json!({"parameter": n.name, "value": n.value, "meaning": n.meaning})).collect::<Vec<_>>(),
+        "inactive": res.inactive.iter().map(|i| json!({"exponent": i.exponent, "coefficient": i.coefficient, "held_at": i.held_at})).collect::<Vec<_>>(),
+        "objective": res.objective,
         "phase_cost": res.phase_cost,
         "parameters": params,
         "parameter_order": PARAM_NAMES,
@@ -486,29 +685,10 @@ pub fn result_text(
     if let Some(w) = res.warning() {
         writeln!(s, "{w}").ok();
     }
-    writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
-    writeln!(
-        s,
-        "termination: {} after {} iterations",
-        res.termination, res.iterations
-    )
-    .ok();
-    parameter_table_text(
-        &mut s,
-        &res.theta,
-        &res.status,
-        res.uncertainty.as_ref().filter(|_| res.intervals_valid()),
-        mass,
-    );
-    if res.uncertainty.is_some() && !res.intervals_valid() {
-        writeln!(
-            s,
-            "intervals: not shown (the fit is not trustworthy, see the first line)"
-        )
-        .ok();
-    } else if res.uncertainty.is_none() {
-        writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
+    for n in res.notes() {
+        writeln!(s, "note: {n}").ok();
     }
+    result_text_body(&mut s, data, res, mass)?;
     let jumps = predicted_jumps(data, &res.theta)?;
     writeln!(
         s,
@@ -526,11 +706,7 @@ pub fn result_text(
             "           {:<10} {:>10.5} {:>5} {:>12.4e} {:>14.4e} {:>14} {:>14}",
             l.level,
             l.gamma,
-            if l.direction == SweepDirection::Up {
-                "up"
-            } else {
-                "down"
-            },
+            dir_name(l.direction),
             l.rms,
             l.rms_normalised,
             f(c.measured_jump(2.0)),
@@ -541,6 +717,44 @@ pub fn result_text(
     s.push_str(&pq_text(data, res)?);
     minima_text(&mut s, &res.minima, &res.status);
     Ok(s)
+}
+
+/// The cost line, termination and parameter table of a fit.
+fn result_text_body(
+    s: &mut String,
+    data: &Dataset,
+    res: &FitResult,
+    mass: Option<f64>,
+) -> Result<(), ReportError> {
+    let _ = data;
+    if res.objective != res.cost {
+        writeln!(s, "model {}: cost (Eq 31, the model's own sweep) = {:.6e}, objective (measured branch, jump penalties) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.objective, (res.objective / res.n_points as f64).sqrt(), res.n_points, res.n_free).ok();
+    } else {
+        writeln!(s, "model {}: cost (Eq 31) = {:.6e}, RMS (a/gamma) = {:.6e} s^2, {} points, {} free parameters", res.kind, res.cost, res.rms_normalised(), res.n_points, res.n_free).ok();
+    }
+    writeln!(
+        s,
+        "termination: {} after {} iterations",
+        res.termination, res.iterations
+    )
+    .ok();
+    parameter_table_text(
+        s,
+        &res.theta,
+        &res.status,
+        res.uncertainty.as_ref().filter(|_| res.intervals_valid()),
+        mass,
+    );
+    if res.uncertainty.is_some() && !res.intervals_valid() {
+        writeln!(
+            s,
+            "intervals: not shown (the fit is not trustworthy, see the first line)"
+        )
+        .ok();
+    } else if res.uncertainty.is_none() {
+        writeln!(s, "intervals: not available (J^T J singular at the optimum: some parameter is not identifiable from these data)").ok();
+    }
+    Ok(())
 }
 
 /// Phase-quadrature table (Table 8 analogue) as text.

@@ -367,3 +367,18 @@ fn synthetic_suite_full_legacy_relative() {
     assert!(t.efficient >= 97, "{} of {} efficient", t.efficient, t.n);
     assert!(t.consistent >= 90, "{} of {} consistent", t.consistent, t.n);
 }
+
+/// Writes case `NLSDOF_CASE` of the legacy design (`NLSDOF_DESIGN=legacy`)
+/// or the informative one as CSV to `NLSDOF_CASE_OUT`.
+#[test]
+#[ignore = "writes one case: NLSDOF_CASE=seed NLSDOF_CASE_OUT=file [NLSDOF_DESIGN=legacy]"]
+fn write_case() {
+    let seed: u64 = std::env::var("NLSDOF_CASE").unwrap().parse().unwrap();
+    let c = if std::env::var("NLSDOF_DESIGN").as_deref() == Ok("legacy") {
+        case(seed)
+    } else {
+        informative_case(seed, &Design::informative()).unwrap().0
+    };
+    support::synthetic::write_csv(&c, &std::env::var("NLSDOF_CASE_OUT").unwrap());
+    println!("{}\ntruth {:?}", c.description, c.truth);
+}

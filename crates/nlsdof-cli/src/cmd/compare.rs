@@ -4,8 +4,8 @@
 
 use super::fit::{parse_model_kind, DataArgs};
 use crate::error::CliError;
-use nlsdof::identification::{FitOptions, FitSpec, Status, N_PARAMS, PARAM_NAMES};
-use nlsdof_report::fit::{pq_text, result_json};
+use nlsdof::identification::{FitSpec, Identification, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof_report::fit::pq_text;
 use serde_json::json;
 use std::fmt::Write as _;
 
@@ -25,8 +25,7 @@ pub struct Args {
     /// Estimate parameters the models hold (e.g. gain): name,..
     #[arg(long, value_name = "NAME,..")]
     pub free: Option<String>,
-    /// Extra global-search starts per refined candidate (1 = none; with --sign
-    /// hardening|softening|auto: starts of the classic multistart, 32 if not given).
+    /// Extra global-search starts per refined candidate (1 = none).
     #[arg(long)]
     pub starts: Option<usize>,
     #[arg(long, default_value_t = 1)]
@@ -42,6 +41,8 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<(), CliError> {
     // (`compare --phase-resonance` is dispatched to `phase_resonance::run_compare_args`)
+    use super::sign::SignArg;
+    use nlsdof::identification::{FitPlan, GainChoice, SignChoice};
     let sign = args.pr.sign.resolve(args.pr.softening)?;
     let data = args.data.load()?;
     let kinds = args
@@ -53,71 +54,50 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if kinds.is_empty() {
         return Err(CliError::Usage("--models is empty".into()));
     }
-    let staged = sign == super::sign::SignArg::Data;
-    let starts = args.starts.unwrap_or(if staged { 1 } else { 32 });
+    let starts = args.starts.unwrap_or(1);
     if starts == 0 || starts > 100_000 {
         return Err(CliError::Usage(format!(
             "--starts {starts} is not allowed: use 1..=100000"
         )));
     }
     let mass = super::fit::resolve_mass(args.mass, None, None)?;
-    let opts = FitOptions {
-        starts,
-        seed: args.seed,
-        ..FitOptions::default()
-    };
-    // (data as fitted, result) per model
-    let mut results: Vec<(
-        nlsdof::identification::Dataset,
-        nlsdof::identification::FitResult,
-    )> = Vec::new();
+    // every model through the one pipeline (identify), as `fit`
+    let mut results: Vec<Identification> = Vec::new();
     for kind in kinds {
-        if staged {
-            // the default staged fit (equation error, landscape, output error)
-            let mut plan = nlsdof::identification::FitPlan::new(kind);
-            plan.starts = starts;
-            plan.seed = args.seed;
-            if let Some(list) = &args.free {
-                for name in list.split(',').filter(|s| !s.trim().is_empty()) {
-                    let n = name.trim().to_ascii_lowercase();
-                    if n == "gain" {
-                        plan.gain = nlsdof::identification::GainChoice::Free;
-                        continue;
-                    }
-                    // a parameter a model does not have is simply not freed for it
-                    let mut probe = FitSpec::new(kind, &data);
-                    match probe.free(&n) {
-                        Ok(()) => plan.free.push(n),
-                        Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
-                        Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
-                    }
-                }
-            }
-            let id = nlsdof::identification::identify(&data, &plan, &|_| {})
-                .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
-            results.push((id.data, id.fit));
-            continue;
-        }
-        let configure = |spec: &mut FitSpec| -> Result<(), CliError> {
-            if let Some(list) = &args.free {
-                for name in list.split(',').filter(|s| !s.trim().is_empty()) {
-                    // a parameter a model does not have is simply not freed for it
-                    match spec.free(name) {
-                        Ok(()) | Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
-                        Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
-                    }
-                }
-            }
-            Ok(())
+        let mut plan = FitPlan::new(kind);
+        plan.starts = starts;
+        plan.seed = args.seed;
+        plan.sign = match sign {
+            SignArg::Data => SignChoice::Auto,
+            SignArg::Auto => SignChoice::Both,
+            SignArg::Hardening => SignChoice::Hardening,
+            SignArg::Softening => SignChoice::Softening,
         };
-        let (r, _) = super::sign::fit_sweep_signed(&data, kind, sign, &configure, &opts)
-            .map_err(|e| CliError::Usage(format!("{kind}: {e}")))?;
-        results.push((data.clone(), r));
+        if let Some(list) = &args.free {
+            for name in list.split(',').filter(|s| !s.trim().is_empty()) {
+                let n = name.trim().to_ascii_lowercase();
+                if n == "gain" {
+                    plan.gain = GainChoice::Free;
+                    continue;
+                }
+                // a parameter a model does not have is simply not freed for it
+                let mut probe = FitSpec::new(kind, &data);
+                match probe.free(&n) {
+                    Ok(()) => plan.free.push(n),
+                    Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
+                    Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
+                }
+            }
+        }
+        let (pb, on_progress) = super::progress::stage_bar(kind.name());
+        let id = nlsdof::identification::identify(&data, &plan, &on_progress);
+        pb.finish_and_clear();
+        results.push(id.map_err(|e| CliError::Usage(format!("{kind}: {e}")))?);
     }
     if args.json {
         let v: Vec<_> = results
             .iter()
-            .map(|(d, r)| result_json(d, r, mass))
+            .map(|id| nlsdof_report::fit::identification_document(id, mass))
             .collect::<Result<_, _>>()?;
         println!(
             "{}",
@@ -128,11 +108,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut s = String::new();
     writeln!(
         s,
-        "{:<22} {:>4} {:>14} {:>12} {:>12} {:>12}  {:<14} parameters (mass-normalised)",
+        "{:<22} {:>4} {:>14} {:>12} {:>12} {:>12}  {:<15} parameters (mass-normalised)",
         "model", "p", "cost", "RMS a/gamma", "AIC", "BIC", "status"
     )
     .ok();
-    for (_, r) in &results {
+    for id in &results {
+        let r = &id.fit;
         let params: Vec<String> = (0..N_PARAMS)
             .filter(|&j| r.status[j] != Status::Absent)
             .map(|j| {
@@ -144,38 +125,52 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 )
             })
             .collect();
-        let status = if !r.converged {
-            "NOT CONVERGED"
-        } else if !r.at_bounds.is_empty() {
-            "AT BOUNDS"
-        } else if !r.unidentifiable.is_empty() {
-            "UNIDENTIFIABLE"
-        } else {
-            "ok"
-        };
         writeln!(
             s,
-            "{:<22} {:>4} {:>14.6e} {:>12.4e} {:>12.2} {:>12.2}  {:<14} {}",
+            "{:<22} {:>4} {:>14.6e} {:>12.4e} {:>12.2} {:>12.2}  {:<15} {}",
             r.kind.name(),
             r.n_free,
             r.cost,
             r.rms_normalised(),
             r.aic(),
             r.bic(),
-            status,
+            status(id),
             params.join(" ")
         )
         .ok();
     }
-    s.push_str("(* = held fixed)\n");
-    for (_, r) in &results {
-        if let Some(w) = r.warning() {
-            writeln!(s, "{w}").ok();
+    s.push_str("(* = held fixed; status as the fit's first line says)\n");
+    for id in &results {
+        if let Some(w) = id.warning() {
+            writeln!(s, "{}: {w}", id.fit.kind).ok();
+        }
+        for n in id.fit.notes() {
+            writeln!(s, "{}: note: {n}", id.fit.kind).ok();
         }
     }
-    for (d, r) in &results {
-        s.push_str(&pq_text(d, r)?);
+    for id in &results {
+        s.push_str(&pq_text(&id.data, &id.fit)?);
     }
     print!("{s}");
     Ok(())
+}
+
+/// The status column: the same judgement as the fit's first line.
+fn status(id: &Identification) -> &'static str {
+    let r = &id.fit;
+    if !r.converged {
+        "NOT CONVERGED"
+    } else if !id.adequacy.adequate {
+        "DOES NOT FIT"
+    } else if !r.at_bounds.is_empty() {
+        "AT BOUNDS"
+    } else if !r.unidentifiable.is_empty() {
+        "UNIDENTIFIABLE"
+    } else if !r.ridges.is_empty() {
+        "RIDGE"
+    } else if !r.crossings.is_empty() {
+        "INTERVAL CROSSES"
+    } else {
+        "ok"
+    }
 }

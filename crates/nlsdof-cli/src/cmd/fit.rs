@@ -3,23 +3,17 @@
 //! helpers shared with `nlsdof compare` (data loading, options, reports).
 
 use crate::error::CliError;
-use nlsdof::identification::models::BETA;
 use nlsdof::identification::profile::{default_step, output_error_profile, OutputErrorProfile};
-use nlsdof::identification::search::best_integer_fit;
 use nlsdof::identification::{
-    fit, identify, Dataset, FitOptions, FitPlan, FitSpec, GainChoice, JumpChoice, ModelKind,
-    PhaseChoice, PhaseConvention, SignChoice, Weighting,
+    identify, Dataset, FitPlan, FitSpec, GainChoice, JumpChoice, ModelKind, PhaseChoice,
+    PhaseConvention, ReadingChoice, SignChoice, Weighting,
 };
 use nlsdof::identification::{Identification, Parameter};
 use nlsdof::SweepDirection;
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
-use serde_json::json;
 use std::path::{Path, PathBuf};
 
-pub use super::progress::progress_bar;
-use nlsdof_report::fit::{
-    fit_svg, integer_pairs_json, integer_pairs_text, model_file_text, result_json, result_text,
-};
+use nlsdof_report::fit::{fit_svg, model_file_text};
 
 /// `--weighting` (see [`Weighting`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -105,19 +99,6 @@ impl DataArgs {
         };
         read_csv(path, &opts).map_err(err)
     }
-
-    /// As [`Self::load`], with the phases dropped where they are not
-    /// displacement lags (the beam files' raw instrument phases), for the
-    /// fits that read phases as lags without detecting the convention.
-    pub fn load_lag_phases(&self) -> Result<Dataset, CliError> {
-        let mut d = self.load()?;
-        if self.beam_dir.is_some() {
-            for c in &mut d.curves {
-                c.phases = None;
-            }
-        }
-        Ok(d)
-    }
 }
 
 #[derive(clap::Args)]
@@ -138,12 +119,14 @@ pub struct Args {
     /// Estimate parameters the model holds (e.g. gain, or an exponent): name,..
     #[arg(long, value_name = "NAME,..")]
     pub free: Option<String>,
-    /// Exponents restricted to integers: every integer pair in the bounds is fitted.
+    /// Exponents restricted to integers: the landscape's integer nodes only; the best
+    /// --refine of them (and the best of each third of each exponent's range) are fitted
+    /// with the exponents held, and the table of every integer pair's equation-error cost
+    /// (and objective where fitted) is reported.
     #[arg(long)]
     pub integer: bool,
     /// Extra global-search starts (Latin hypercube) per refined landscape candidate
-    /// (default 1 = none: the local fit from the equation-error start). With --integer or
-    /// --sign auto: starts of the classic multistart (default 32).
+    /// (default 1 = none: the local fit from the equation-error start).
     #[arg(long)]
     pub starts: Option<usize>,
     /// Do not use the phase columns (default: used when every curve has phases, with
@@ -188,10 +171,17 @@ pub struct Args {
     /// Seed of the Latin-hypercube starts.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Add a jump-frequency residual per up-sweep with a measured jump, weight LAMBDA >= 0
-    /// (see JUMP FREQUENCIES below; 0 = plain Eq 31).
-    #[arg(long = "jump-weight", value_name = "LAMBDA")]
+    /// Weight W >= 0 of the jump penalties (default 1: a model fold one measured step on
+    /// the wrong side of a point costs as much as the point's own amplitude; 0 = none, each
+    /// point against the nearest stable model state). See JUMPS below.
+    #[arg(long = "jump-weight", value_name = "W")]
     pub jump_weight: Option<f64>,
+    /// How measured jumps are read: auto (default: exact, except curves whose sweep
+    /// demonstrably left its branch before the model's fold), exact (every jump at the
+    /// model's fold, within a step), censored (every jump only bounds the fold: a sweep may
+    /// leave its branch early, never late). See JUMPS below.
+    #[arg(long = "jump-reading", value_enum, value_name = "auto|exact|censored")]
+    pub jump_reading: Option<ReadingArg>,
     /// TOML file of bounds: name = [min, max] (for beta/kappa: of beta_ref/kappa_ref, see --help).
     #[arg(long, value_name = "FILE")]
     pub bounds: Option<PathBuf>,
@@ -385,9 +375,26 @@ pub fn plan_from_args(
         plan.bounds = parse_bounds(b)?;
     }
     plan.sign = match sign {
-        SignArg::Data | SignArg::Auto => SignChoice::Auto,
+        SignArg::Data => SignChoice::Auto,
+        SignArg::Auto => SignChoice::Both,
         SignArg::Hardening => SignChoice::Hardening,
         SignArg::Softening => SignChoice::Softening,
+    };
+    if args.integer {
+        if kind.stiffness() != nlsdof::identification::models::Term::FreeExponent
+            && kind.damping() != nlsdof::identification::models::Term::FreeExponent
+            && !plan.free.iter().any(|n| n == "rho" || n == "eta")
+        {
+            return Err(CliError::Usage(format!(
+                "--integer: the {kind} model has no free exponent"
+            )));
+        }
+        plan.exponents = nlsdof::identification::identify::ExponentChoice::Integer;
+    }
+    plan.reading = match args.jump_reading {
+        None | Some(ReadingArg::Auto) => ReadingChoice::Auto,
+        Some(ReadingArg::Exact) => ReadingChoice::Exact,
+        Some(ReadingArg::Censored) => ReadingChoice::Censored,
     };
     if args.no_phase && args.phase_convention.is_some() {
         return Err(CliError::Usage(
@@ -502,7 +509,15 @@ fn oe_profiles(id: &Identification) -> Result<Vec<OutputErrorProfile>, CliError>
     Ok(out)
 }
 
-/// The default fit: [`identify`] (equation error, landscape, output error).
+/// `--jump-reading`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReadingArg {
+    Auto,
+    Exact,
+    Censored,
+}
+
+/// The fit: [`identify`] (equation error, landscape, output error, decisions, self-check).
 fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Result<(), CliError> {
     let (plan, fix_mass) = plan_from_args(args, kind, sign)?;
     let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
@@ -552,17 +567,21 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         if args.profile {
             v["identification"]["profile_oe_ci95"] = nlsdof_report::fit::profiles_json(&profiles);
         }
+        if args.integer {
+            v["integer_pairs"] = nlsdof_report::fit::integer_nodes_json(&id);
+        }
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
         print!("{}", nlsdof_report::fit::identification_report(&id, mass)?);
         print!("{}", nlsdof_report::fit::profiles_text(&profiles));
+        if args.integer {
+            print!("{}", nlsdof_report::fit::integer_nodes_text(&id));
+        }
     }
     Ok(())
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    use super::sign::{fit_sweep_signed, SignArg};
-    use nlsdof_report::fit::{sign_trials_json, sign_trials_text};
     // (`fit --phase-resonance` is dispatched to `phase_resonance::run_fit_verb`)
     let sign = args.pr.sign.resolve(args.pr.softening)?;
     if let Some(l) = args.jump_weight {
@@ -571,130 +590,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 "--jump-weight {l} is not allowed: use a finite value >= 0"
             )));
         }
-        if args.integer || sign == SignArg::Auto {
-            return Err(CliError::Usage(
-                "--jump-weight is not available with --integer or --sign auto".into(),
-            ));
-        }
-    }
-    if sign == SignArg::Auto && args.integer {
-        return Err(CliError::Usage(
-            "--sign auto is not available with --integer: choose --sign hardening or softening"
-                .into(),
-        ));
     }
     let kind = parse_model_kind(&args.model)?;
-    if !(args.integer || sign == SignArg::Auto) {
-        return run_identify(&args, kind, sign);
-    }
-    if args.landscape.is_some()
-        || args.no_phase
-        || args.phase_convention.is_some()
-        || args.weighting.is_some()
-    {
-        return Err(CliError::Usage(
-            "--landscape, --no-phase, --phase-convention and --weighting belong to the default staged fit, not to --integer or --sign auto (which fit Eq 31, absolute)".into(),
-        ));
-    }
-    // every output can be written, and no file is named twice, before any work
-    let mut targets: Vec<(&str, &Path)> = Vec::new();
-    if let Some(p) = &args.out {
-        targets.push(("--out", p));
-    }
-    if let Some(p) = &args.plot {
-        targets.push(("--plot", p));
-    }
-    nlsdof_io::atomic::check_targets(&targets)?;
-    let data = args.data.load_lag_phases()?;
-    let mut spec = FitSpec::new_signed(
-        kind,
-        &data,
-        if sign == SignArg::Softening {
-            nlsdof::identification::Sign::Softening
-        } else {
-            nlsdof::identification::Sign::Hardening
-        },
-    );
-    if let Some(b) = &args.bounds {
-        apply_bounds(&mut spec, b)?;
-    }
-    let fix_mass = apply_fix_free(&mut spec, args.fix.as_deref(), args.free.as_deref())?;
-    let mass = resolve_mass(args.mass, fix_mass, args.model_file.as_deref())?;
-    let starts = args.starts.unwrap_or(32);
-    if starts == 0 || starts > 100_000 {
-        return Err(CliError::Usage(format!(
-            "--starts {starts} is not allowed: use 1..=100000"
-        )));
-    }
-    let opts = FitOptions {
-        starts,
-        seed: args.seed,
-        ..FitOptions::default()
-    };
-    let mut integer_table = Vec::new();
-    let mut sign_trials = Vec::new();
-    let res = if args.integer {
-        let (best, pairs) = best_integer_fit(&data, &spec, &opts)
-            .map_err(|e| CliError::Usage(format!("--integer: {e}")))?;
-        integer_table = pairs;
-        best
-    } else if sign == SignArg::Auto {
-        let configure = |s: &mut FitSpec| -> Result<(), CliError> {
-            if let Some(b) = &args.bounds {
-                apply_bounds(s, b)?;
-            }
-            apply_fix_free(s, args.fix.as_deref(), args.free.as_deref())?;
-            Ok(())
-        };
-        let (r, t) = fit_sweep_signed(&data, kind, sign, &configure, &opts)?;
-        sign_trials = t;
-        r
-    } else {
-        let pb = progress_bar(opts.starts, kind.name());
-        let r = match args.jump_weight {
-            Some(l) if l > 0.0 => {
-                nlsdof::identification::fit_with_jumps(&data, &spec, &opts, l, &|| pb.inc(1))
-            }
-            _ => fit(&data, &spec, &opts, &|| pb.inc(1)),
-        };
-        pb.finish_and_clear();
-        r.map_err(|e| CliError::Usage(e.to_string()))?
-    };
-    // render everything first, then commit the files
-    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
-    if let Some(out) = &args.out {
-        files.push((out.clone(), model_file_text(&res, mass)?.into_bytes()));
-    }
-    if let Some(p) = &args.plot {
-        files.push((p.clone(), fit_svg(&data, &res)?.into_bytes()));
-    }
-    for (p, bytes) in &files {
-        nlsdof_io::atomic::write_atomic(p, bytes)?;
-    }
-    if args.json {
-        let mut v = result_json(&data, &res, mass)?;
-        if let Some(t) = sign_trials_json(&sign_trials) {
-            v["sign_auto"] = t;
-        }
-        v["jump_weight"] = json!(args.jump_weight.unwrap_or(0.0));
-        if args.integer {
-            v["integer_pairs"] = integer_pairs_json(&integer_table);
-        }
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
-    } else {
-        let mut s = sign_trials_text(
-            &sign_trials,
-            if res.theta[BETA] < 0.0 {
-                nlsdof::identification::Sign::Softening
-            } else {
-                nlsdof::identification::Sign::Hardening
-            },
-        );
-        s.push_str(&result_text(&data, &res, mass)?);
-        if args.integer {
-            s.push_str(&integer_pairs_text(&integer_table));
-        }
-        print!("{s}");
-    }
-    Ok(())
+    // one pipeline: --sign auto, --integer and every expert flag go
+    // through identify
+    run_identify(&args, kind, sign)
 }

@@ -8,7 +8,7 @@ use nlsdof::identification::phase_resonance::{
     default_spec, fit_phase_resonance, PrDataset, PrFitOptions, PrFitResult,
 };
 use nlsdof::identification::search::{fit_each_sign, signs_to_try, SignTrial};
-use nlsdof::identification::{fit, Dataset, FitOptions, FitResult, FitSpec, ModelKind, Sign};
+use nlsdof::identification::{FitSpec, ModelKind, Sign};
 
 /// Options of `fit` and `compare` added for phase-resonance data and the
 /// stiffness sign.
@@ -80,23 +80,6 @@ impl SignArg {
         };
         signs_to_try(kind, self == SignArg::Auto, preferred)
     }
-}
-
-/// Sweep fit (Eq 31) with the stiffness sign chosen by `sign`
-/// (`Auto`: both signs, the lower cost kept). `configure` applies
-/// bounds/--fix/--free to each spec.
-pub fn fit_sweep_signed(
-    data: &Dataset,
-    kind: ModelKind,
-    sign: SignArg,
-    configure: &dyn Fn(&mut FitSpec) -> Result<(), CliError>,
-    opts: &FitOptions,
-) -> Result<(FitResult, Vec<SignTrial>), CliError> {
-    each_sign(kind, sign, opts.starts, &|s, tick| {
-        let mut spec = FitSpec::new_signed(kind, data, s);
-        configure(&mut spec)?;
-        Ok(fit(data, &spec, opts, tick).map(|r| (r.cost, r)))
-    })
 }
 
 /// Phase-resonance fit with the stiffness sign chosen by `sign`.

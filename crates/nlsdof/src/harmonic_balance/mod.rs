@@ -393,7 +393,7 @@ impl ForcedResponse {
     /// (rad/s), in `direction` (for `Down` the points are returned in sweep
     /// order, i.e. decreasing frequency). See [`sweep`](self) for the rules.
     pub fn sweep(&self, omegas: &[f64], direction: SweepDirection) -> Result<Sweep, SolveError> {
-        sweep::sweep(self, omegas, direction, None)
+        sweep::sweep(self, omegas, direction, None, None)
     }
 
     /// As [`ForcedResponse::sweep`], but the state at the first step (in
@@ -409,7 +409,31 @@ impl ForcedResponse {
         direction: SweepDirection,
         initial_amplitude: f64,
     ) -> Result<Sweep, SolveError> {
-        sweep::sweep(self, omegas, direction, Some(initial_amplitude))
+        sweep::sweep(self, omegas, direction, Some(initial_amplitude), None)
+    }
+
+    /// As [`ForcedResponse::sweep_from`], with every **stable** steady state
+    /// at each step (in sweep order, the followed one among them; empty
+    /// where the mass sticks or no stable state exists). The sweep isolates
+    /// these roots anyway wherever a fold is possible (at certified steps
+    /// the one root is the state), so they come at no extra cost; the
+    /// output error of the identification compares a measured point with
+    /// them ([`crate::identification::objective`]).
+    pub fn sweep_with_states(
+        &self,
+        omegas: &[f64],
+        direction: SweepDirection,
+        initial_amplitude: f64,
+    ) -> Result<(Sweep, Vec<Vec<SteadyState>>), SolveError> {
+        let mut states = Vec::with_capacity(omegas.len());
+        let sw = sweep::sweep(
+            self,
+            omegas,
+            direction,
+            Some(initial_amplitude),
+            Some(&mut states),
+        )?;
+        Ok((sw, states))
     }
 
     /// The point of the response curve where the phase lag is 90°

@@ -104,6 +104,7 @@ pub(crate) fn sweep(
     omegas: &[f64],
     dir: SweepDirection,
     initial: Option<f64>,
+    states: Option<&mut Vec<Vec<SteadyState>>>,
 ) -> Result<Sweep, SolveError> {
     validate_omegas(omegas)?;
     if let Some(a) = initial {
@@ -137,6 +138,17 @@ pub(crate) fn sweep(
         && (eqs.len() == 1 || eqs.windows(2).all(|w| certify_cell(&w[0], &w[1])));
     if certified {
         if let Some(points) = fast_sweep(r, omegas, &eqs, &order) {
+            if let Some(st) = states {
+                // one root per step (certified)
+                st.clear();
+                st.extend(points.iter().map(|p| {
+                    vec![SteadyState {
+                        amplitude: p.amplitude,
+                        phase: p.phase,
+                        stable: p.stable,
+                    }]
+                }));
+            }
             return Ok(Sweep {
                 direction: dir,
                 points,
@@ -145,7 +157,7 @@ pub(crate) fn sweep(
             });
         }
     }
-    general_sweep(r, omegas, &order, dir, &eqs, &unique, initial)
+    general_sweep(r, omegas, &order, dir, &eqs, &unique, initial, states)
 }
 
 fn fast_sweep(
@@ -303,6 +315,7 @@ fn unique_root(
     })
 }
 
+#[allow(clippy::too_many_arguments)]
 fn general_sweep(
     r: &ForcedResponse,
     omegas: &[f64],
@@ -311,7 +324,11 @@ fn general_sweep(
     eqs: &[ResponseEquation],
     unique: &[bool],
     initial: Option<f64>,
+    mut states: Option<&mut Vec<Vec<SteadyState>>>,
 ) -> Result<Sweep, SolveError> {
+    if let Some(st) = states.as_deref_mut() {
+        st.clear();
+    }
     // the folds, and the roots at the steps where the search isolated them
     let (folds, mut step_roots) = find_folds_on_steps(r, omegas, eqs)?;
     let sgn = match dir {
@@ -408,6 +425,13 @@ fn general_sweep(
                 .map(|p| p.amplitude / r.scale);
             if let Some(p) = unique_root(r, &eqs[i], w, prev_x) {
                 rank = Some(0);
+                if let Some(st) = states.as_deref_mut() {
+                    st.push(vec![SteadyState {
+                        amplitude: p.amplitude,
+                        phase: p.phase,
+                        stable: p.stable,
+                    }]);
+                }
                 points.push(p);
                 prev_omega = w;
                 continue;
@@ -418,6 +442,9 @@ fn general_sweep(
             None => r.steady_states(w).map_err(|e| with_omega(e, w))?,
         };
         let roots = set.roots;
+        if let Some(st) = states.as_deref_mut() {
+            st.push(roots.iter().filter(|s| s.stable).copied().collect());
+        }
         if roots.is_empty() {
             points.push(sticking_point(w, set.no_motion));
             rank = None;

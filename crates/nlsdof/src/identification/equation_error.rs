@@ -993,6 +993,7 @@ pub(crate) fn solve_magnitude_to(
         ftol,
         gtol: xtol,
         cost_floor: 1e-28 * prep.points.len() as f64,
+        decrement_tol: 0.0,
     };
     let mut best: Option<super::levenberg_marquardt::LmResult> = None;
     let run = |s: &[f64], best: &mut Option<super::levenberg_marquardt::LmResult>| {

@@ -234,6 +234,135 @@ pub fn fold_frequency_derivatives(
     Some(out)
 }
 
+/// Derivatives of a fold `(a_f, Ω_f)` of the response curve at input
+/// `gain·γ` with respect to θ, and the phase lag there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FoldDerivatives {
+    /// `dΩ_f/dθ` (rad/s per unit of each parameter).
+    pub omega: [f64; N_PARAMS],
+    /// `da_f/dθ` (m per unit of each parameter).
+    pub amplitude: [f64; N_PARAMS],
+    /// Phase lag at the fold, rad, `atan2(Ω D, S)`.
+    pub phase: f64,
+    /// `dφ_f/dθ`.
+    pub phase_derivative: [f64; N_PARAMS],
+}
+
+/// [`FoldDerivatives`] at the fold `(omega, a)` of the response at input
+/// `gain·gamma`. A fold satisfies `F = 0` and `∂F/∂a = 2a Q = 0` with
+/// (notation of [`super::objective`], `B = g(ρ)βa^ρ`, `K = g(η)κ(Ωa)^η`)
+///
+/// ```text
+/// Q = S² + ρ S B + Ω² D² + η Ω² D K
+/// ```
+///
+/// so `dΩ_f = −F_θ/F_Ω` ([`fold_frequency_derivatives`]) and
+/// `da_f = −(Q_θ + Q_Ω dΩ_f)/Q_a` with
+///
+/// ```text
+/// a Q_a = 2ρSB + ρ²B² + ρ²SB + 2ηΩ²DK + η²Ω²K² + η²Ω²DK
+/// Ω Q_Ω = −4Ω²S − 2ρΩ²B + 2Ω²D² + 4ηΩ²DK + η²Ω²K² + η²Ω²DK
+/// Q_α = 2S + ρB,   Q_δ = Ω²(2D + ηK)
+/// Q_β = b_β (2S + ρB + ρS),              b_β = g(ρ) a^ρ
+/// Q_ρ = b_ρ (2S + ρB + ρS) + S B,        b_ρ = β a^ρ (g'(ρ) + g(ρ) ln a)
+/// Q_κ = Ω² k_κ (2D + ηK + ηD),           k_κ = g(η)(Ωa)^η
+/// Q_η = Ω² k_η (2D + ηK + ηD) + Ω² D K,  k_η = κ(Ωa)^η (g'(η) + g(η) ln Ωa)
+/// Q_gain = 0
+/// ```
+///
+/// The phase `φ = atan2(ΩD, S)` moves with θ directly and through
+/// `(a_f, Ω_f)`: `dS = S_θ + (ρB/a) da − 2Ω dΩ`,
+/// `d(ΩD) = Ω D_θ + (ηΩK/a) da + (D + ηK) dΩ`. `None` where `F_Ω` or `Q_a`
+/// vanishes (a cusp).
+pub fn fold_derivatives(
+    theta: &Parameters,
+    gamma: f64,
+    omega: f64,
+    a: f64,
+) -> Option<FoldDerivatives> {
+    let domega = fold_frequency_derivatives(theta, gamma, omega, a)?;
+    let (alpha, delta, beta, rho, kappa, eta) = (
+        theta[ALPHA],
+        theta[DELTA],
+        theta[BETA],
+        theta[RHO],
+        theta[KAPPA],
+        theta[ETA],
+    );
+    let w = omega;
+    let w2 = w * w;
+    let la = a.ln();
+    let lwa = (w * a).ln();
+    let (gr, ar) = if beta != 0.0 {
+        (g_unchecked(rho), (rho * la).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let (ge, wae) = if kappa != 0.0 {
+        (g_unchecked(eta), (eta * lwa).exp())
+    } else {
+        (0.0, 0.0)
+    };
+    let b = gr * beta * ar;
+    let k = ge * kappa * wae;
+    let s = alpha + b - w2;
+    let d = delta + k;
+    let qa = (2.0 * rho * s * b
+        + rho * rho * b * b
+        + rho * rho * s * b
+        + 2.0 * eta * w2 * d * k
+        + eta * eta * w2 * k * k
+        + eta * eta * w2 * d * k)
+        / a;
+    let qw = (-4.0 * w2 * s - 2.0 * rho * w2 * b
+        + 2.0 * w2 * d * d
+        + 4.0 * eta * w2 * d * k
+        + eta * eta * w2 * k * k
+        + eta * eta * w2 * d * k)
+        / w;
+    if !(qa.is_finite() && qa != 0.0 && qw.is_finite()) {
+        return None;
+    }
+    let mut q = [0.0; N_PARAMS];
+    let mut ds = [0.0; N_PARAMS];
+    let mut dd = [0.0; N_PARAMS];
+    q[ALPHA] = 2.0 * s + rho * b;
+    ds[ALPHA] = 1.0;
+    q[DELTA] = w2 * (2.0 * d + eta * k);
+    dd[DELTA] = 1.0;
+    if beta != 0.0 {
+        let b_beta = gr * ar;
+        let b_rho = beta * ar * (g_derivative(rho) + gr * la);
+        q[BETA] = b_beta * (2.0 * s + rho * b + rho * s);
+        q[RHO] = b_rho * (2.0 * s + rho * b + rho * s) + s * b;
+        ds[BETA] = b_beta;
+        ds[RHO] = b_rho;
+    }
+    if kappa != 0.0 {
+        let k_kappa = ge * wae;
+        let k_eta = kappa * wae * (g_derivative(eta) + ge * lwa);
+        q[KAPPA] = w2 * k_kappa * (2.0 * d + eta * k + eta * d);
+        q[ETA] = w2 * k_eta * (2.0 * d + eta * k + eta * d) + w2 * d * k;
+        dd[KAPPA] = k_kappa;
+        dd[ETA] = k_eta;
+    }
+    let mut da = [0.0; N_PARAMS];
+    let mut dphi = [0.0; N_PARAMS];
+    let den = s * s + w2 * d * d;
+    for j in 0..N_PARAMS {
+        da[j] = -(q[j] + qw * domega[j]) / qa;
+        let dsj = ds[j] + rho * b / a * da[j] - 2.0 * w * domega[j];
+        let dqj = w * dd[j] + eta * w * k / a * da[j] + (d + eta * k) * domega[j];
+        dphi[j] = (s * dqj - w * d * dsj) / den;
+    }
+    Some(FoldDerivatives {
+        omega: domega,
+        amplitude: da,
+        phase: (w * d).atan2(s),
+        phase_derivative: dphi,
+    })
+}
+
 /// Eq 31 plus the jump residuals (module docs), weight `λ`, in the
 /// optimisation variables of [`Problem`]. A curve whose model never meets
 /// the backbone makes θ not evaluable.

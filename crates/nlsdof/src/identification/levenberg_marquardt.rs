@@ -42,6 +42,15 @@ pub struct LmOptions {
     pub gtol: f64,
     /// Stop when the cost is at most this (an exact fit).
     pub cost_floor: f64,
+    /// Stop when the Gauss–Newton step on the free variables would lower
+    /// the cost by at most `decrement_tol · s²` (`s² = cost/(m − n)`, m
+    /// residuals, n parameters): the optimum is then within
+    /// `√decrement_tol` standard errors (in the metric of `JᵀJ`), far
+    /// inside the statistical resolution of the estimate; or when the last
+    /// [`PROGRESS_WINDOW`] accepted steps lowered it by less than
+    /// `100 · decrement_tol · s²` in all (a crawl along a ridge of the cost
+    /// whose floor is flat to the resolution of the data). 0 (default) = off.
+    pub decrement_tol: f64,
 }
 
 impl Default for LmOptions {
@@ -53,9 +62,14 @@ impl Default for LmOptions {
             ftol: 1e-14,
             gtol: 1e-12,
             cost_floor: 0.0,
+            decrement_tol: 0.0,
         }
     }
 }
+
+/// Accepted steps over which [`LmOptions::decrement_tol`]'s progress test
+/// looks back.
+pub const PROGRESS_WINDOW: usize = 5;
 
 /// Why the iteration stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,6 +86,9 @@ pub enum Termination {
     MaxIterations,
     /// No decrease found even with a very large damping (λ > 1e20).
     Stalled,
+    /// The Gauss–Newton decrement, or the progress of the last steps, is
+    /// below the statistical resolution ([`LmOptions::decrement_tol`]).
+    SmallDecrement,
 }
 
 impl Termination {
@@ -83,6 +100,7 @@ impl Termination {
             Termination::SmallGradient => "small-gradient",
             Termination::MaxIterations => "max-iterations",
             Termination::Stalled => "stalled",
+            Termination::SmallDecrement => "small-decrement",
         }
     }
 
@@ -198,6 +216,8 @@ pub fn minimise<P: LeastSquares + ?Sized>(
     let mut lambda = 1e-3;
     let mut nu = 2.0;
     let mut iterations = 0;
+    // costs after the last accepted steps (the progress test)
+    let mut history: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
     let done = |u: Vec<f64>, cost, iterations, evaluations, termination| {
         Ok(LmResult {
             u,
@@ -235,6 +255,30 @@ pub fn minimise<P: LeastSquares + ?Sized>(
             return done(u, cost, iterations, evaluations, Termination::SmallGradient);
         }
         let m = inactive.len();
+        if opts.decrement_tol > 0.0 && r.len() > n {
+            // Gauss–Newton decrement gᵀ A⁻¹ g on the free variables
+            let mut ar = vec![0.0; m * m];
+            let mut br = vec![0.0; m];
+            for (p, &kp) in inactive.iter().enumerate() {
+                for (q, &kq) in inactive.iter().enumerate() {
+                    ar[p * m + q] = a[kp * n + kq];
+                }
+                br[p] = -g[kp];
+            }
+            if let Some(x) = cholesky_solve(&ar, &br, m) {
+                let dec: f64 = -x.iter().zip(&br).map(|(x, b)| x * -b).sum::<f64>();
+                let s2 = cost / (r.len() - n) as f64;
+                if dec.is_finite() && dec.abs() <= opts.decrement_tol * s2 {
+                    return done(
+                        u,
+                        cost,
+                        iterations,
+                        evaluations,
+                        Termination::SmallDecrement,
+                    );
+                }
+            }
+        }
         loop {
             let mut ar = vec![0.0; m * m];
             let mut br = vec![0.0; m];
@@ -313,6 +357,24 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 cost = cost_new;
                 if cost <= opts.cost_floor {
                     return done(u, cost, iterations, evaluations, Termination::ZeroResidual);
+                }
+                if opts.decrement_tol > 0.0 && r.len() > n {
+                    history.push_back(old);
+                    if history.len() > PROGRESS_WINDOW {
+                        history.pop_front();
+                    }
+                    let s2 = cost / (r.len() - n) as f64;
+                    if history.len() == PROGRESS_WINDOW
+                        && history[0] - cost <= 100.0 * opts.decrement_tol * s2
+                    {
+                        return done(
+                            u,
+                            cost,
+                            iterations,
+                            evaluations,
+                            Termination::SmallDecrement,
+                        );
+                    }
                 }
                 if reduction <= opts.ftol * old {
                     return done(

@@ -22,13 +22,16 @@
 pub mod data;
 pub mod decay;
 pub mod equation_error;
+pub mod flags;
 pub mod global;
 pub mod identify;
 pub mod jumps;
 pub mod landscape;
 pub mod levenberg_marquardt;
 pub mod models;
+pub mod noise;
 pub mod objective;
+pub mod output_error;
 pub mod parameters;
 pub mod phase_resonance;
 pub mod profile;
@@ -39,8 +42,8 @@ pub mod uncertainty;
 pub use data::{Curve, DataError, Dataset, Record};
 pub use equation_error::{EquationErrorFit, PhaseConvention};
 pub use identify::{
-    identify, FitPlan, GainChoice, Identification, IdentifyError, IdentifyProgress, JumpChoice,
-    PhaseChoice, SignChoice, Weighting,
+    identify, Adequacy, CurveReport, FitPlan, GainChoice, Identification, IdentifyError,
+    IdentifyProgress, JumpChoice, PhaseChoice, ReadingChoice, SignChoice, Weighting,
 };
 pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};
@@ -139,21 +142,46 @@ pub struct FitResult {
     /// Jacobian at the optimum: the data cannot separate them.
     pub unidentifiable: Vec<&'static str>,
     /// Sum of the squared phase residuals at the optimum (`None` when phase
-    /// was not fitted); the objective minimised was `cost + phase_cost`.
+    /// was not fitted).
     pub phase_cost: Option<f64>,
+    /// The amplitude part of the objective minimised, with its jump
+    /// penalties: Eq 31's `cost` for a fit of Eq 31, the measured-branch
+    /// output error ([`output_error`]) for [`ResponseBranch::Measured`]
+    /// (never above `cost` in the exact reading, equal to it where every
+    /// point is on the model sweep's own state).
+    pub objective: f64,
+    /// The model amplitude each point was compared with by the objective
+    /// (data order): `model_amplitudes` for Eq 31.
+    pub compared_amplitudes: Vec<f64>,
+    /// Pairs of free parameters the data do not separate to first order
+    /// (`|r| ≥ 0.999`, [`flags::ridges`]).
+    pub ridges: Vec<flags::Ridge>,
+    /// Free parameters whose 95 % interval crosses a physical bound.
+    pub crossings: Vec<flags::BoundCrossing>,
+    /// Parameters at a bound that is a result (η = −1: Coulomb friction),
+    /// held there for the intervals of the others.
+    pub natural: Vec<flags::NaturalBound>,
+    /// Exponents without effect (their coefficient went to 0), held.
+    pub inactive: Vec<flags::Inactive>,
 }
 
 impl FitResult {
     /// Whether the linearised intervals mean anything: the fit converged,
-    /// no parameter sits at a bound and the Jacobian has full rank.
+    /// no parameter sits at a bound (natural bounds and vanished terms are
+    /// held, not counted), the Jacobian has full rank, no two estimates lie
+    /// on a ridge (`|r| ≥ 0.999`) and no interval crosses a physical bound.
     pub fn intervals_valid(&self) -> bool {
         self.converged
             && self.at_bounds.is_empty()
             && self.unidentifiable.is_empty()
             && self.uncertainty.is_some()
+            && self.ridges.is_empty()
+            && self.crossings.is_empty()
     }
 
-    /// One line saying why the fit is not trustworthy, `None` if it is.
+    /// One line saying why the fit or its intervals are not to be trusted,
+    /// `None` if they are. Natural bounds and vanished terms are results,
+    /// not warnings ([`Self::notes`]).
     pub fn warning(&self) -> Option<String> {
         let mut why = Vec::new();
         if !self.converged {
@@ -170,13 +198,29 @@ impl FitResult {
         } else if self.uncertainty.is_none() {
             why.push("no intervals (J^T J singular or no residual degrees of freedom)".into());
         }
+        for r in &self.ridges {
+            why.push(r.describe());
+        }
+        for c in &self.crossings {
+            why.push(c.describe());
+        }
         (!why.is_empty()).then(|| {
             format!(
-                "WARNING: the {} fit {}; intervals are not valid",
+                "WARNING: the {} fit: {}; intervals are not valid",
                 self.kind,
                 why.join("; ")
             )
         })
+    }
+
+    /// Results worth a line that are not warnings: parameters at natural
+    /// bounds ("eta = -1 (Coulomb friction)") and vanished terms.
+    pub fn notes(&self) -> Vec<String> {
+        self.natural
+            .iter()
+            .map(|n| n.describe())
+            .chain(self.inactive.iter().map(|i| i.describe()))
+            .collect()
     }
 
     /// Akaike information criterion `n ln(cost/n) + 2p`.
@@ -298,35 +342,46 @@ fn fit_impl(
         })
         .collect();
     let theta = problem.theta(&best.result.u);
-    let at_bounds: Vec<&'static str> = problem
-        .free
-        .iter()
-        .enumerate()
-        .filter(|&(k, _)| {
-            let w = (hi[k] - lo[k]).abs().max(1e-300);
-            let u = best.result.u[k];
-            (u - lo[k]).abs() <= 1e-6 * w || (hi[k] - u).abs() <= 1e-6 * w
-        })
-        .map(|(_, &j)| PARAM_NAMES[j])
-        .collect();
     assess(
         data,
         spec,
-        &problem.free,
         theta,
         best.result.termination,
         best.result.iterations,
         minima,
-        at_bounds,
     )
+}
+
+/// Free parameters of `spec` at θ that sit on a bound (within 1e-6 of the
+/// box width of the optimisation variable): `(index, at the lower bound)`.
+pub(crate) fn bound_hits(spec: &FitSpec, theta: &Parameters) -> Vec<(usize, bool)> {
+    let empty = Dataset { curves: Vec::new() };
+    let Ok(problem) = Problem::new(&empty, spec) else {
+        return Vec::new();
+    };
+    let (lo, hi) = problem.u_bounds();
+    let u = problem.u_of(theta);
+    problem
+        .free
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &j)| {
+            let w = (hi[k] - lo[k]).abs().max(1e-300);
+            if (u[k] - lo[k]).abs() <= 1e-6 * w {
+                Some((j, true))
+            } else if (hi[k] - u[k]).abs() <= 1e-6 * w {
+                Some((j, false))
+            } else {
+                None
+            }
+        })
+        .collect()
 }
 
 /// The statistics of a fit at θ on `data`: cost, per-level RMS, model
 /// amplitudes, linearised intervals and null directions of the Jacobian.
 /// (Used for the fit's own data, and to judge a fit made on a subsample on
 /// all points.)
-#[allow(clippy::too_many_arguments)]
-
 /// Per-curve RMS of `a_model − a_meas` (m) and of it over γ, for the model
 /// amplitudes `model` in data order.
 pub fn level_stats(data: &Dataset, model: &[f64]) -> Vec<LevelStats> {
@@ -353,43 +408,113 @@ pub fn level_stats(data: &Dataset, model: &[f64]) -> Vec<LevelStats> {
     levels
 }
 
+/// The statistics of a fit of `spec` at θ on `data`: Eq 31's cost and the
+/// objective's, per-level RMS, model amplitudes, linearised intervals, null
+/// directions, ridges, crossings and bounds (natural ones held for the
+/// intervals of the others, [`flags`]).
 pub(crate) fn assess(
     data: &Dataset,
     spec: &FitSpec,
-    free: &[usize],
     theta: Parameters,
     termination: Termination,
     iterations: usize,
     minima: Vec<Minimum>,
-    at_bounds: Vec<&'static str>,
 ) -> Result<FitResult, FitError> {
-    let e = evaluate_with_phase(data, &theta, true, spec.phase_weight)?;
-    let jac = e.jacobian.as_ref().expect("jacobian requested");
-    let unc = uncertainty::uncertainty(&theta, free, jac, &e.residuals);
-    let unidentifiable = uncertainty::null_directions(free, jac);
     let n_amp = data.len();
+    let e = objective::evaluate_spec(data, spec, &theta, true)?;
+    let n_phase = match spec.phase_weight {
+        Some(_) => data
+            .curves
+            .iter()
+            .filter(|c| c.phases.is_some())
+            .map(|c| c.omegas.len())
+            .sum(),
+        None => 0,
+    };
+    // observations: amplitude and phase residuals (the jump penalties that
+    // follow are constraints, zero at a consistent fit)
+    let n_obs = (n_amp + n_phase).min(e.residuals.len());
+    let jac = e.jacobian.as_ref().expect("jacobian requested");
+    let mut natural = Vec::new();
+    let mut at_bounds = Vec::new();
+    for (j, lower) in bound_hits(spec, &theta) {
+        match flags::natural_meaning(j, lower, theta[j]) {
+            Some(meaning) => natural.push(flags::NaturalBound {
+                name: PARAM_NAMES[j],
+                value: theta[j],
+                meaning,
+            }),
+            None => at_bounds.push(PARAM_NAMES[j]),
+        }
+    }
+    let free: Vec<usize> = spec
+        .free_indices()
+        .into_iter()
+        .filter(|&j| !natural.iter().any(|n| n.name == PARAM_NAMES[j]))
+        .collect();
+    let unc = uncertainty::uncertainty(&theta, &free, &jac[..n_obs], &e.residuals[..n_obs]);
+    let unidentifiable = uncertainty::null_directions(&free, &jac[..n_obs]);
+    let crossings = unc.as_ref().map_or(Vec::new(), flags::crossings);
+    // Ridges are judged in the optimisation variables (ln α, ln δ, ln β_ref,
+    // ρ, ln κ_ref, η, ln gain): β and ρ themselves are tied by
+    // β = β_ref/(g(ρ) A_ref^ρ) whatever the data, so their correlation is
+    // near 1 on every fit and says nothing (it was reported as a ridge on
+    // most good fits before this), while β_ref and ρ are separated by the
+    // data or not.
+    let ridges = {
+        let problem = Problem::new(data, spec)?;
+        let cols = problem.dtheta_du(&theta);
+        let jac_u: Vec<[f64; N_PARAMS]> = jac[..n_obs]
+            .iter()
+            .map(|row| {
+                let mut out = [0.0; N_PARAMS];
+                for (k, &j) in problem.free.iter().enumerate() {
+                    out[j] = (0..N_PARAMS).map(|p| row[p] * cols[k][p]).sum();
+                }
+                out
+            })
+            .collect();
+        uncertainty::uncertainty(&theta, &free, &jac_u, &e.residuals[..n_obs])
+            .map_or(Vec::new(), |u| flags::ridges(&u))
+    };
     let phase_cost = spec
         .phase_weight
-        .map(|_| e.residuals[n_amp..].iter().map(|r| r * r).sum::<f64>());
+        .map(|_| e.residuals[n_amp..n_obs].iter().map(|r| r * r).sum::<f64>());
     let levels = level_stats(data, &e.model);
-    let amplitude_cost: f64 = e.residuals[..n_amp].iter().map(|r| r * r).sum();
+    let objective: f64 = e.residuals[..n_amp]
+        .iter()
+        .chain(&e.residuals[n_obs..])
+        .map(|r| r * r)
+        .sum();
+    let (cost, model_amplitudes) = if spec.branch == ResponseBranch::Sweep {
+        (objective, e.model.clone())
+    } else {
+        let s = evaluate_with_phase(data, &theta, false, None)?;
+        (s.cost(), s.model)
+    };
     Ok(FitResult {
         kind: spec.kind,
         status: spec.status,
         theta,
-        cost: amplitude_cost,
+        cost,
         n_points: n_amp,
-        n_free: free.len(),
+        n_free: spec.free_indices().len(),
         termination,
         iterations,
         minima,
         uncertainty: unc,
         levels,
-        model_amplitudes: e.model,
+        model_amplitudes,
         converged: termination.converged(),
         at_bounds,
         unidentifiable,
         phase_cost,
+        objective,
+        compared_amplitudes: e.model,
+        ridges,
+        crossings,
+        natural,
+        inactive: Vec::new(),
     })
 }
 

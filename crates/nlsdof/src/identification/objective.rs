@@ -96,6 +96,17 @@ pub struct FitSpec {
     /// Which model steady state each measured point is compared with
     /// (default [`ResponseBranch::Sweep`], Eq 31).
     pub branch: ResponseBranch,
+    /// Per curve (data order): its measured jump is read as censored
+    /// ([`super::output_error::JumpReading`]) under
+    /// [`ResponseBranch::Measured`]; missing entries are exact.
+    pub censored: Vec<bool>,
+    /// Weight of the jump penalties of [`ResponseBranch::Measured`]
+    /// (default 1: a fold one step on the wrong side of a measured point
+    /// costs as much as the point's own amplitude).
+    pub jump_weight: f64,
+    /// [`ResponseBranch::Measured`]: the measured phases carry an unknown
+    /// constant offset, profiled out ([`super::output_error`]).
+    pub profile_phase_offset: bool,
 }
 
 /// Which steady state of the model a measured point `(Ω, a)` is compared
@@ -115,9 +126,15 @@ pub enum ResponseBranch {
     /// point lies on some branch, so at the true θ each is compared with its
     /// own branch whichever way the sweep went; the cost is continuous except
     /// where a fold crosses a measured step *and* that step's branch ends.
-    /// [`identify()`](crate::identification::identify()) minimises this first, then Eq 31
-    /// from its optimum.
     Nearest,
+    /// The state the measured sweep was on, continuous in θ
+    /// ([`super::output_error`]): the sweep's own state, another stable
+    /// state before the model's fold (free when the curve's jump is read as
+    /// censored, [`FitSpec::censored`], else charged by its distance to the
+    /// fold), or the end of the followed branch after the fold (charged).
+    /// Equal to Eq 31 where every point is on the sweep's state, never
+    /// above it. [`identify()`](crate::identification::identify()) minimises this.
+    Measured,
 }
 
 /// Sign of the nonlinear stiffness coefficient β in a fit.
@@ -294,6 +311,9 @@ impl FitSpec {
             stiffness_sign: Sign::Hardening,
             phase_weight: None,
             branch: ResponseBranch::Sweep,
+            censored: Vec::new(),
+            jump_weight: 1.0,
+            profile_phase_offset: false,
         }
     }
 
@@ -660,7 +680,7 @@ pub fn branch_response(
     branch: ResponseBranch,
 ) -> Result<Vec<Vec<(f64, f64)>>, SolveError> {
     use rayon::prelude::*;
-    if branch == ResponseBranch::Sweep {
+    if branch != ResponseBranch::Nearest {
         return model_response(data, theta);
     }
     let model = normalised_model(theta);
@@ -797,8 +817,42 @@ pub fn evaluate_branch(
     phase_weight: Option<f64>,
     branch: ResponseBranch,
 ) -> Result<Evaluation, SolveError> {
+    if branch == ResponseBranch::Measured {
+        let opts = super::output_error::MatchOptions {
+            phase_weight,
+            ..super::output_error::MatchOptions::amplitudes()
+        };
+        return Ok(super::output_error::evaluate_measured(data, theta, jacobian, &opts)?.0);
+    }
     let resp = branch_response(data, theta, branch)?;
     Ok(evaluation_of(data, theta, &resp, jacobian, phase_weight))
+}
+
+/// The residuals of `spec`'s objective at θ (its response rule, phase
+/// weight, jump readings and jump weight).
+pub fn evaluate_spec(
+    data: &Dataset,
+    spec: &FitSpec,
+    theta: &Parameters,
+    jacobian: bool,
+) -> Result<Evaluation, SolveError> {
+    if spec.branch == ResponseBranch::Measured {
+        return Ok(super::output_error::evaluate_measured(
+            data,
+            theta,
+            jacobian,
+            &super::output_error::MatchOptions::of(spec),
+        )?
+        .0);
+    }
+    let resp = branch_response(data, theta, spec.branch)?;
+    Ok(evaluation_of(
+        data,
+        theta,
+        &resp,
+        jacobian,
+        spec.phase_weight,
+    ))
 }
 
 /// [`evaluate_with_phase`] with the curves' first model jumps (for the jump
@@ -1066,14 +1120,7 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals(&self, u: &[f64]) -> Option<Vec<f64>> {
         let th = self.theta(u);
-        let e = evaluate_branch(
-            self.data,
-            &th,
-            false,
-            self.spec.phase_weight,
-            self.spec.branch,
-        )
-        .ok()?;
+        let e = evaluate_spec(self.data, self.spec, &th, false).ok()?;
         e.residuals
             .iter()
             .all(|r| r.is_finite())
@@ -1082,14 +1129,7 @@ impl super::levenberg_marquardt::LeastSquares for Problem<'_> {
 
     fn residuals_and_jacobian(&self, u: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.theta(u);
-        let e = evaluate_branch(
-            self.data,
-            &th,
-            true,
-            self.spec.phase_weight,
-            self.spec.branch,
-        )
-        .ok()?;
+        let e = evaluate_spec(self.data, self.spec, &th, true).ok()?;
         self.residuals_and_jacobian_of(&th, e)
     }
 }

@@ -710,6 +710,7 @@ impl Default for TimeFitOptions {
                 ftol: 1e-12,
                 gtol: 1e-10,
                 cost_floor: 0.0,
+                decrement_tol: 0.0,
             },
             starts: 1,
             seed: 1,

@@ -387,7 +387,7 @@ pub fn identification_text(id: &Identification) -> String {
                 if g.freed { "free" } else { "held at 1" },
                 o.gain,
                 o.f_statistic,
-                if o.at_bound { ", but the free gain sits at a bound" } else { "" },
+                if o.at_bound { "; the free gain sits at its bound" } else { "" },
                 g.gain,
                 g.f_statistic,
             ),

@@ -104,18 +104,19 @@ pub fn identification_document(
 /// units of the noise over all points, the curves that do not fit, the
 /// thresholds and what was tried.
 pub fn adequacy_json(id: &Identification) -> Value {
-    use nlsdof::identification::identify::{ADEQUACY_ALL, ADEQUACY_CURVE};
+    use nlsdof::identification::identify::{ADEQUACY_ALL, ADEQUACY_CURVE, ADEQUACY_PEAKS};
     let a = &id.adequacy;
     json!({
         "adequate": a.adequate,
         "residual_over_noise": a.ratio,
+        "peak_residual_over_noise": a.peak_ratio,
         "failing_levels": a.failing.iter().map(|&i| {
             let c = &id.curves[i];
             json!({"level": c.level, "sweep": dir_name(c.direction), "residual_over_noise": c.noise.ratio()})
         }).collect::<Vec<_>>(),
         "message": id.adequacy_message(),
-        "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL,
-                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2"},
+        "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL, "peaks_mean_z2": ADEQUACY_PEAKS,
+                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2; residual_over_noise and peak_residual_over_noise are sqrt(mean z^2)"},
         "escalation": a.escalation,
     })
 }

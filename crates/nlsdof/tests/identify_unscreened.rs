@@ -54,7 +54,7 @@ fn run(c: &Case) -> Outcome {
     let gain_freed = id.spec.status[GAIN] == Status::Free;
     let censored = id.spec.censored.iter().filter(|&&x| x).count();
     let line = format!(
-        "{}: cost/truth {:8.3} {}{} | rho {:.3}/{:.3} eta {:.3}/{:.3} gain {:.4} | res/noise {:.2} (worst curve mean z2 {:.2}){}{} | {:.2}s{}",
+        "{}: cost/truth {:8.3} {}{} | rho {:.3}/{:.3} eta {:.3}/{:.3} gain {:.4} | res/noise {:.2} (worst curve mean z2 {:.2}, peaks {:.2}){}{} | {:.2}s{}",
         c.description,
         cf / ct,
         if optimum { "opt" } else { "MISS" },
@@ -69,6 +69,7 @@ fn run(c: &Case) -> Outcome {
             .iter()
             .map(|c| c.noise.mean_z2)
             .fold(0.0f64, f64::max),
+        id.adequacy.peak_ratio,
         if censored > 0 {
             format!(", {censored} censored")
         } else {
@@ -77,7 +78,11 @@ fn run(c: &Case) -> Outcome {
         id.warning().map(|w| format!(" | {}", w.replace('\n', " / "))).unwrap_or_default(),
         dt,
         if gain_freed { " GAIN FREED" } else { "" },
-    );
+    ) + if id.adequacy.escalation.is_empty() {
+        ""
+    } else {
+        " ESCALATED"
+    };
     Outcome {
         optimum,
         flagged,
@@ -154,8 +159,16 @@ fn unscreened_suite_full() {
 #[test]
 #[ignore = "writes one case: NLSDOF_CASE=seed NLSDOF_CASE_OUT=file"]
 fn write_case() {
-    let seed: u64 = std::env::var("NLSDOF_CASE").unwrap().parse().unwrap();
+    // (a no-op without its variables: `-- --ignored` runs it with the suites)
+    let (Ok(seed), Ok(out)) = (
+        std::env::var("NLSDOF_CASE"),
+        std::env::var("NLSDOF_CASE_OUT"),
+    ) else {
+        eprintln!("write_case: set NLSDOF_CASE=seed NLSDOF_CASE_OUT=file");
+        return;
+    };
+    let seed: u64 = seed.parse().expect("NLSDOF_CASE is a seed (u64)");
     let c = unscreened_case(seed);
-    support::synthetic::write_csv(&c, &std::env::var("NLSDOF_CASE_OUT").unwrap());
+    support::synthetic::write_csv(&c, &out);
     println!("{}\ntruth {:?}", c.description, c.truth);
 }

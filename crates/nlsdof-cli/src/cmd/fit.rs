@@ -205,27 +205,46 @@ pub struct Args {
 }
 
 fn fit_long_help() -> String {
-    "DEFAULT FIT (stages): branch-free equation error -> exponent landscape over (rho, eta) -> sign, gain \
-and jump handling chosen from the data (jump residuals with LAMBDA = 100 when an up-sweep shows a \
-measured jump) -> for each of the best --refine nodes: its equation error with \
-the chosen gain, a branch-free output error (each point against the model's nearest stable state, at \
-most 30 iterations), then Eq 31 from there (at most 30 iterations; only the best one continues) -> \
-the best fit refined on all points (data of at most \
-50,000 points; a 1500-point subsample before). Details: docs/identification.md.\n\n\
-OBJECTIVE (Eq 31): sum over levels and steps of (a_model/gamma - a_meas/gamma)^2, the model amplitude \
-following the measured sweep direction (branch following through jumps).\n\n\
+    "DEFAULT FIT (stages, one library call: identification::identify): branch-free equation error \
+-> exponent landscape over (rho, eta) -> gain screen -> the best --refine landscape candidates race \
+(output error, at most 30 iterations each; those stopped near the lead continue) -> the gain and \
+the terms that do not matter decided by the objective's noise-scaled drop -> the winner refined on \
+all points (data of at most 50,000 points; a 1500-point subsample before) -> SELF-CHECK: each \
+curve's residual against its noise, estimated from the data; a fit well above it escalates (more \
+candidates, both signs, folds moved, a multistart of 16) and, if it still does not fit, says so on \
+the first line (\"the model does not fit levels ...: residual N x the noise\") and in JSON under \
+\"adequacy\". Details: docs/identification.md.\n\n\
+OBJECTIVE: each measured point against the model state the measured sweep was on (the state the \
+model's own sweep follows; before the model's fold another stable state; after it the fold's end), \
+continuous in the parameters, plus the jump penalties below. The reported `cost` is the paper's \
+Eq 31 (sum over levels and steps of (a_model/gamma - a_meas/gamma)^2, the model's own sweep) at the \
+result; `objective` is what was minimised; both are equal where every point is on the model \
+sweep's state.\n\n\
 PARAMETERS are mass-normalised (only ratios to m are identifiable with acceleration input): \
 alpha = k/m, delta = c/m, beta = k_r/m, kappa = c_e/m, exponents rho, eta, and the forcing gain \
-(the model sees gain*gamma; fixed at 1 unless --free gain).\n\n\
+(the model sees gain*gamma; held at 1 unless the data demand it, or --free gain / --fix gain=G).\n\n\
 DEFAULT BOUNDS (derived from the data): alpha in [(Omega_min/2)^2, (1.5 Omega_max)^2]; delta in \
 [1e-4, 1e2] x delta0 (delta0 from the lowest level's peak height); beta_ref = g(rho) beta A_ref^rho \
 in [1e-6, 20] x alpha0; kappa_ref = g(eta) kappa (Omega_ref A_ref)^eta in [1e-6, 1e2] x delta0; \
 rho in [0, 10]; eta in [-1, 8]; gain in [0.1, 10]. A_ref is the largest measured amplitude, \
 Omega_ref its frequency. --bounds FILE overrides: lines `alpha = [min, max]`.\n\n\
-JUMP FREQUENCIES (--jump-weight LAMBDA): Eq 31 is piecewise constant in the location of a jump (moving the predicted jump across one measured step changes the cost by a step), so a plain fit can put the jump-down several per cent away from the measured one. With LAMBDA > 0 each up-sweep with a measured jump adds the residual sqrt(LAMBDA n_c) (a_peak/gamma) (f_jump,model / f_jump,measured - 1), f_jump,model = the model's fold frequency (its 90-degree frequency where it has no fold), with analytic derivatives. The reported cost, RMS and intervals are those of Eq 31 alone at the optimum. Example (clamped beam): --free gain --jump-weight 100. Not with --integer, --sign auto or --phase-resonance.\n\n\
-NONLINEAR STIFFNESS SIGN: hardening (beta > 0) by default; --softening (or --sign softening) fits \
-beta < 0 (bounds then apply to |beta_ref|, whose upper default is 0.95 alpha0); --sign auto fits both \
-and keeps the lower cost (both costs reported).\n\n\
+JUMPS: a stepped sine can leave its branch before the fold (noise, a disturbance, the controller), \
+never after it. --jump-reading exact: a measured jump sits at the model's fold within one measured \
+step; a model fold on the wrong side of a point costs (s (d + 0.1 h)/h)^2 x W (d its distance, h \
+the measured step, s the point's amplitude; --jump-weight W, default 1). censored: a measured \
+jump only bounds the fold (a fold after the jump is free, one before it is penalised). auto \
+(default): exact, except the curves that demonstrably left their branch early (tested only when \
+the exact fit does not fit its noise); the text and JSON say per level whether the sweep left \
+early and by how many Hz.\n\n\
+FLAGS: not converged; parameters at bounds; parameters the data cannot separate; pairs that trade \
+off along a ridge (|r| >= 0.999: named, with what would separate them); 95 % intervals that cross \
+a physical bound (delta < 0, gain < 0); natural bounds reported as results (eta = -1: Coulomb \
+friction); terms that vanished (eta when kappa goes to 0, rho when beta goes to 0). Any of these \
+sets intervals_valid false. A fit that is fine says nothing alarming.\n\n\
+NONLINEAR STIFFNESS SIGN: from the data by default (--sign data: each candidate takes the sign of its \
+equation-error beta); --sign hardening|softening holds it (softening: bounds apply to |beta_ref|, \
+whose upper default is 0.95 alpha0); --sign auto races both signs through the same stages (both \
+objectives reported). The self-check's escalation tries both signs either way.\n\n\
 PHASE-RESONANCE DATA (--phase-resonance): DATA is a CSV gamma,f_hz,amplitude[,level][,weight], one row \
 per level: the frequency and amplitude where the phase lag is 90 deg. Not auto-detected: without the \
 flag DATA is read as sweeps. Residuals per level: (a_model - a_meas)/gamma and \

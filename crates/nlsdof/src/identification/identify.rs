@@ -60,7 +60,11 @@
 //!    refined on every point (at most [`POLISH_ROUNDS`] rounds of
 //!    [`POLISH_ITERATIONS`] while a round ends at its limit), its folds
 //!    moved past the points still on their branch (`reassign_jumps`), and
-//!    the lowest objective kept.
+//!    the lowest objective kept. A result that still did not converge has
+//!    its terms settled again on those data (a refinement can end on a
+//!    ridge where a term has no effect that the race's data had not shown:
+//!    κ → 0 with η wandering, measured on an unscreened case that ended at
+//!    max-iterations at the truth's cost before this rule).
 //! 7. **Folds off the steps** (`keep_folds_off_steps`): a fitted fold that
 //!    lies within 1e-9 (relative) of a measured frequency is moved to 1e-9
 //!    away from it (a minimum-norm change of the parameters), so that which
@@ -1481,6 +1485,12 @@ fn finish(
     best = settle_terms(setup, best, refine_data)?;
     step();
     best = refine_all_points(setup, best, fit_data, refine_data, progress)?;
+    if !best.fit.converged {
+        // the refinement on every point can end on a ridge where a term
+        // has no effect (the race's data had not shown it): the terms are
+        // settled again on the data of the result
+        best = settle_terms(setup, best, fit_data_or_sub(fit_data, refine_data))?;
+    }
     best = keep_folds_off_steps(best, fit_data_or_sub(fit_data, refine_data))?;
     judged_on_all(best, fit_data, refine_data)
 }
@@ -2019,7 +2029,7 @@ fn settle_terms(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, I
         let Ok(r) = fit_impl(work, &reduced, &opts, None, &|| {}) else {
             continue;
         };
-        let cand = Fitted::from_result(r, reduced);
+        let cand = continue_unfinished(setup, Fitted::from_result(r, reduced), work)?;
         let tested: Vec<usize> = [coef, exp]
             .into_iter()
             .filter(|&j| best.spec.status[j] == Status::Free)

@@ -147,8 +147,9 @@ pub struct FitResult {
     /// The amplitude part of the objective minimised, with its jump
     /// penalties: Eq 31's `cost` for a fit of Eq 31, the measured-branch
     /// output error ([`output_error`]) for [`ResponseBranch::Measured`]
-    /// (never above `cost` in the exact reading, equal to it where every
-    /// point is on the model sweep's own state).
+    /// (never above `cost`: the state of the model's own sweep is always
+    /// one of the states a point is compared with; equal to it where every
+    /// point is on that state).
     pub objective: f64,
     /// The model amplitude each point was compared with by the objective
     /// (data order): `model_amplitudes` for Eq 31.

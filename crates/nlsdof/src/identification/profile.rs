@@ -1,5 +1,7 @@
 //! Profile-likelihood intervals of the exponents from the **output-error**
-//! objective (Eq 31, plus the phase residuals when phase is fitted): the
+//! objective the fit minimised (Eq 31, or the measured-branch output error
+//! of [`super::identify()`] with its jump penalties, plus the phase
+//! residuals when phase is fitted): the
 //! interval of ρ (or η) over which
 //!
 //! ```text
@@ -78,8 +80,11 @@ fn objective(res: &super::FitResult, data: &Dataset, spec: &FitSpec) -> (f64, us
             .sum(),
         None => 0,
     };
+    // (`objective`, not Eq 31's `cost`: a fit of the measured-branch output
+    // error minimises the former, and the profile must compare minima of
+    // what was minimised)
     (
-        res.cost + res.phase_cost.unwrap_or(0.0),
+        res.objective + res.phase_cost.unwrap_or(0.0),
         res.n_points + phase_points,
     )
 }

@@ -118,6 +118,12 @@ pub fn adequacy_json(id: &Identification) -> Value {
         "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL, "peaks_mean_z2": ADEQUACY_PEAKS,
                        "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2; residual_over_noise and peak_residual_over_noise are sqrt(mean z^2)"},
         "escalation": a.escalation,
+        "needs_early_jumps": a.needs_early_jumps.map(|r| json!({
+            "note": "the fit fits the noise only with the jumps of these curves read as censored (the sweep left its branch before the model's fold); read exactly it does not",
+            "exact_residual_over_noise": r,
+            "censored": id.curves.iter().filter(|c| c.reading == nlsdof::identification::output_error::JumpReading::Censored)
+                .map(|c| json!({"level": c.level, "sweep": dir_name(c.direction)})).collect::<Vec<_>>(),
+        })),
     })
 }
 

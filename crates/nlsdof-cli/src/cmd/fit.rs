@@ -235,7 +235,10 @@ the measured step, s the point's amplitude; --jump-weight W, default 1). censore
 jump only bounds the fold (a fold after the jump is free, one before it is penalised). auto \
 (default): exact, except the curves that demonstrably left their branch early (tested only when \
 the exact fit does not fit its noise); the text and JSON say per level whether the sweep left \
-early and by how many Hz.\n\n\
+early and by how many Hz. A fit that fits its noise only because auto read some jumps as \
+censored is flagged (adequacy.needs_early_jumps): it rests on sweeps having left early, which \
+the data alone cannot confirm, and on data of the model family it means the optimum was missed; \
+--jump-reading censored states the assumption instead.\n\n\
 FLAGS: not converged; parameters at bounds; parameters the data cannot separate; pairs that trade \
 off along a ridge (|r| >= 0.999: named, with what would separate them); 95 % intervals that cross \
 a physical bound (delta < 0, gain < 0); natural bounds reported as results (eta = -1: Coulomb \

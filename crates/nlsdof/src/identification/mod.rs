@@ -453,7 +453,18 @@ pub(crate) fn assess(
         .into_iter()
         .filter(|&j| !natural.iter().any(|n| n.name == PARAM_NAMES[j]))
         .collect();
-    let unc = uncertainty::uncertainty(&theta, &free, &jac[..n_obs], &e.residuals[..n_obs]);
+    // intervals by the sandwich with the noise model's per-point noise
+    // (amplitude noise grows with the amplitude; Eq 31 weighs every point
+    // alike), scaled to the residuals (`uncertainty_with_noise`)
+    let with_phase = spec.phase_weight.is_some();
+    let sigma = noise::noise_model(data, &e.residuals[..n_obs], with_phase).rows(data, with_phase);
+    let unc = uncertainty::uncertainty_with_noise(
+        &theta,
+        &free,
+        &jac[..n_obs],
+        &e.residuals[..n_obs],
+        &sigma,
+    );
     let unidentifiable = uncertainty::null_directions(&free, &jac[..n_obs]);
     let crossings = unc.as_ref().map_or(Vec::new(), flags::crossings);
     // Ridges are judged in the optimisation variables (ln α, ln δ, ln β_ref,

@@ -186,7 +186,12 @@ mod tests {
 
     /// Noisy data of a generalised-stiffness model, no jumps: the profile
     /// of ρ against the linearised interval (the objective is close to
-    /// quadratic there, so the two must agree) and against the truth.
+    /// quadratic there, so the two must agree) and against the truth. Both
+    /// read the noise as of one size (`σ̂² = P*/(m − p)`), so the
+    /// comparison is with the plain linearised interval
+    /// ([`crate::identification::uncertainty::uncertainty`]); the fit's own
+    /// intervals are the sandwich with the noise model, which for this
+    /// proportional noise is a different (and the right) statement.
     #[test]
     fn rho_profile_agrees_with_the_linearised_interval_near_quadratic() {
         let wn = std::f64::consts::TAU * 10.0;
@@ -223,7 +228,18 @@ mod tests {
         let mut start_spec = spec.clone();
         start_spec.start = theta;
         let best = fit(&data, &start_spec, &FitOptions::default(), &|| {}).unwrap();
-        let u = best.uncertainty.as_ref().expect("intervals");
+        // the plain linearised interval at the fit (one noise size)
+        let e = crate::identification::objective::evaluate_spec(&data, &spec, &best.theta, true)
+            .unwrap();
+        let jac = e.jacobian.as_ref().unwrap();
+        let n = data.len();
+        let u = &crate::identification::uncertainty::uncertainty(
+            &best.theta,
+            &spec.free_indices(),
+            &jac[..n],
+            &e.residuals[..n],
+        )
+        .expect("intervals");
         let k = u.index("rho").unwrap();
         let (lin_lo, lin_hi, se) = (u.lower[k], u.upper[k], u.std_errors[k]);
         let prof =

@@ -373,20 +373,11 @@ fn synthetic_suite_full_legacy_relative() {
 #[test]
 #[ignore = "writes one case: NLSDOF_CASE=seed NLSDOF_CASE_OUT=file [NLSDOF_DESIGN=legacy]"]
 fn write_case() {
-    // (a no-op without its variables: `-- --ignored` runs it with the suites)
-    let (Ok(seed), Ok(out)) = (
-        std::env::var("NLSDOF_CASE"),
-        std::env::var("NLSDOF_CASE_OUT"),
-    ) else {
-        eprintln!("write_case: set NLSDOF_CASE=seed NLSDOF_CASE_OUT=file");
-        return;
-    };
-    let seed: u64 = seed.parse().expect("NLSDOF_CASE is a seed (u64)");
-    let c = if std::env::var("NLSDOF_DESIGN").as_deref() == Ok("legacy") {
-        case(seed)
-    } else {
-        informative_case(seed, &Design::informative()).unwrap().0
-    };
-    support::synthetic::write_csv(&c, &out);
-    println!("{}\ntruth {:?}", c.description, c.truth);
+    support::synthetic::write_case_from_env(|seed| {
+        if std::env::var("NLSDOF_DESIGN").as_deref() == Ok("legacy") {
+            case(seed)
+        } else {
+            informative_case(seed, &Design::informative()).unwrap().0
+        }
+    });
 }

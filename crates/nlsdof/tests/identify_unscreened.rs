@@ -159,16 +159,5 @@ fn unscreened_suite_full() {
 #[test]
 #[ignore = "writes one case: NLSDOF_CASE=seed NLSDOF_CASE_OUT=file"]
 fn write_case() {
-    // (a no-op without its variables: `-- --ignored` runs it with the suites)
-    let (Ok(seed), Ok(out)) = (
-        std::env::var("NLSDOF_CASE"),
-        std::env::var("NLSDOF_CASE_OUT"),
-    ) else {
-        eprintln!("write_case: set NLSDOF_CASE=seed NLSDOF_CASE_OUT=file");
-        return;
-    };
-    let seed: u64 = seed.parse().expect("NLSDOF_CASE is a seed (u64)");
-    let c = unscreened_case(seed);
-    support::synthetic::write_csv(&c, &out);
-    println!("{}\ntruth {:?}", c.description, c.truth);
+    support::synthetic::write_case_from_env(unscreened_case);
 }

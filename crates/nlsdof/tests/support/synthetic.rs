@@ -543,6 +543,25 @@ pub fn unscreened_case(seed: u64) -> Case {
 
 /// Writes case `c` as a long-format CSV (`level,gamma,f_hz,amplitude
 /// [,phase_deg],sweep`) to `path`, for inspecting a case with the CLI.
+/// Writes the case of seed `NLSDOF_CASE`, made by `make`, as CSV to
+/// `NLSDOF_CASE_OUT` (for inspecting a suite's case with the CLI); a no-op
+/// without those variables, so that `-- --ignored` can run it with the
+/// suites.
+#[allow(dead_code)]
+pub fn write_case_from_env(make: impl Fn(u64) -> Case) {
+    let (Ok(seed), Ok(out)) = (
+        std::env::var("NLSDOF_CASE"),
+        std::env::var("NLSDOF_CASE_OUT"),
+    ) else {
+        eprintln!("write_case: set NLSDOF_CASE=seed NLSDOF_CASE_OUT=file");
+        return;
+    };
+    let seed: u64 = seed.parse().expect("NLSDOF_CASE is a seed (u64)");
+    let c = make(seed);
+    write_csv(&c, &out);
+    println!("{}\ntruth {:?}", c.description, c.truth);
+}
+
 pub fn write_csv(c: &Case, path: &str) {
     let phase = c.data.curves.iter().all(|cur| cur.phases.is_some());
     let mut s = format!(

@@ -106,3 +106,25 @@ fn bad_records() {
         Err(DecayError::StartOutside { .. })
     ));
 }
+
+/// Short records (issue 30: 64 to about 200 samples of a 20 Hz sine at
+/// 1 kHz panicked with a slice index error) are a typed error, never a
+/// panic, whatever their length.
+#[test]
+fn short_records_are_an_error_not_a_panic() {
+    for n in 1..400 {
+        let x: Vec<f64> = (0..n)
+            .map(|i| (TWO_PI * 20.0 * i as f64 / 1000.0).sin())
+            .collect();
+        match analyse(&x, 1000.0, &DecayOptions::default()) {
+            Ok(_) | Err(_) => {}
+        }
+    }
+    let x: Vec<f64> = (0..100)
+        .map(|i| (TWO_PI * 20.0 * i as f64 / 1000.0).sin())
+        .collect();
+    assert!(matches!(
+        analyse(&x, 1000.0, &DecayOptions::default()),
+        Err(DecayError::TooShort { len: 100, .. })
+    ));
+}

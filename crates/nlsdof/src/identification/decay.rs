@@ -383,9 +383,17 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     let start = match given_start {
         Some(s) => s,
         None => {
-            let env = envelope(x, fs, band);
             let trim = ((3.0 / band.1.max(1e-300)).max(2.0 / (band.1 - band.0)) * fs) as usize;
-            let inner = &env[trim.min(n)..n.saturating_sub(trim)];
+            // the band-pass transients at both ends leave nothing between
+            // them on a record this short (issue 30: 64–200 samples panicked)
+            if n < 2 * trim + 64 {
+                return Err(DecayError::TooShort {
+                    len: n,
+                    min: 2 * trim + 64,
+                });
+            }
+            let env = envelope(x, fs, band);
+            let inner = &env[trim..n - trim];
             let max = inner.iter().cloned().fold(0.0, f64::max);
             trim + inner.iter().rposition(|&a| a >= 0.95 * max).unwrap_or(0)
         }

@@ -680,19 +680,28 @@ impl Identification {
                 if early.len() > 1 { "their" } else { "its" },
             ));
         }
-        Some(if names.is_empty() {
-            format!(
-                "WARNING: the model does not fit the data: residual {:.1}x the noise{tried}",
-                self.adequacy.ratio
+        let peaks_fail = !(self.adequacy.peak_ratio.powi(2) <= ADEQUACY_PEAKS);
+        Some(
+            if names.is_empty() && peaks_fail && self.adequacy.ratio.powi(2) <= ADEQUACY_ALL {
+                format!(
+                "WARNING: the model does not fit the resonance peaks: residual {:.1}x the noise there \
+                 ({:.1}x over all points){tried}",
+                self.adequacy.peak_ratio, self.adequacy.ratio
             )
-        } else {
-            format!(
-                "WARNING: the model does not fit level{} {}: residual {:.1}x the noise{tried}",
-                if names.len() > 1 { "s" } else { "" },
-                names.join(", "),
-                worst
-            )
-        })
+            } else if names.is_empty() {
+                format!(
+                    "WARNING: the model does not fit the data: residual {:.1}x the noise{tried}",
+                    self.adequacy.ratio
+                )
+            } else {
+                format!(
+                    "WARNING: the model does not fit level{} {}: residual {:.1}x the noise{tried}",
+                    if names.len() > 1 { "s" } else { "" },
+                    names.join(", "),
+                    worst
+                )
+            },
+        )
     }
 }
 

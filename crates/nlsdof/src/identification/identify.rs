@@ -34,7 +34,7 @@
 //!    ([`SignChoice::Auto`]), or both are fitted ([`SignChoice::Both`]).
 //!    The candidates the limit stopped near the lead continue; the lowest
 //!    objective wins.
-//! 5. **Decisions, on the race's data** (`decide`): the terms
+//! 5. **Decisions, on the race's data** (`finish`): the terms
 //!    (`settle_terms`, below), the gain (`decide_gain`), the terms again
 //!    (a refitted gain can leave a term near a copy of the linear one).
 //!    Tests need hundreds of points, not thousands: a subsample suffices.

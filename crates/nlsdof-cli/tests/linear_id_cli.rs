@@ -195,6 +195,8 @@ fn bad_input_one_line_exit_2_no_output_file() {
     let f = frf.to_str().unwrap();
     assert!(fails(&["linear-id", f, "--mass", "-1", "--out", o]).contains("--mass -1"));
     assert!(fails(&["linear-id", f, "--poles", "x", "--out", o]).contains("--poles"));
+    // issue 30: --max-poles 0 was accepted (and read as 1)
+    assert!(fails(&["linear-id", f, "--max-poles", "0", "--out", o]).contains("--max-poles 0"));
     assert!(fails(&["linear-id", f, "--poles", "1", "--mode", "3", "--out", o]).contains("mode 3"));
     assert!(fails(&["frf-estimate", "--input", f, "--out", o]).contains("time"));
     assert!(!out.exists());

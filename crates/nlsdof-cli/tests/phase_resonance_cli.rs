@@ -244,6 +244,31 @@ fn errors_are_one_line_and_leave_no_file() {
         ],
         &["--softening conflicts with --sign auto"],
     );
+    // sweep-only options are refused, not ignored (issue 30: --landscape and
+    // --profile exited 0 and wrote or printed nothing), and no file is left
+    let land = dir.path().join("l.json");
+    fails(
+        &[
+            "fit",
+            wing,
+            "--phase-resonance",
+            "--landscape",
+            land.to_str().unwrap(),
+        ],
+        &["--landscape applies to sweep data", "--phase-resonance"],
+    );
+    assert!(!land.exists());
+    fails(
+        &[
+            "fit",
+            wing,
+            "--phase-resonance",
+            "--profile",
+            "--jump-reading",
+            "censored",
+        ],
+        &["--profile, --jump-reading apply to sweep data"],
+    );
 }
 
 /// Sweep CSV of a softening Duffing (f_n = 10 Hz, ζ = 1 %), up and down sweeps.

@@ -267,6 +267,20 @@ fn model_order_selection_finds_the_number_of_modes() {
     }
 }
 
+/// No pole pair to try is a typed error (issue 30: it was read as one).
+#[test]
+fn model_order_selection_needs_a_pole_pair() {
+    let w = grid(4.5, 6.0, 100);
+    let h = frf(&one_mode(), &w);
+    assert!(matches!(
+        fit_auto(&w, &h, &VfOptions::default(), 0, 0.9),
+        Err(VectorFitError::BadOption {
+            name: "max_pairs",
+            ..
+        })
+    ));
+}
+
 /// The paper's Table 3 (without sensors): m = 0.26699 kg, k = 306.7878 N/m,
 /// c = 0.1164 N s/m, recovered from receptance, mobility and accelerance
 /// FRFs with force input; α, δ (and no mass) with acceleration input.

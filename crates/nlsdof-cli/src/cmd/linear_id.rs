@@ -237,6 +237,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
 /// `--poles N|auto`.
 fn parse_poles(s: &str, max_pairs: usize) -> Result<PoleCount, CliError> {
     if s.eq_ignore_ascii_case("auto") {
+        if max_pairs == 0 {
+            return Err(usage(
+                "--max-poles 0 is not allowed: --poles auto needs at least 1 pole pair".into(),
+            ));
+        }
         return Ok(PoleCount::Auto { max_pairs });
     }
     let n: usize = s.parse().ok().filter(|&n| n >= 1).ok_or_else(|| {

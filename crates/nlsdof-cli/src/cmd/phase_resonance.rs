@@ -61,12 +61,38 @@ pub fn check_frequency_weight(w: f64) -> Result<(), CliError> {
 /// `nlsdof fit --phase-resonance`.
 pub fn run_fit_verb(args: &super::fit::Args) -> Result<(), CliError> {
     let sign = args.pr.sign.resolve(args.pr.softening)?;
-    if args.jump_weight.is_some() {
-        return Err(CliError::Usage(
-            "--jump-weight applies to sweep data, not to --phase-resonance points".into(),
-        ));
-    }
+    sweep_only_refused(args)?;
     run_fit(args, sign)
+}
+
+/// The `fit` options that act on sweep data only, refused in one line with
+/// `--phase-resonance` (issue 30: `--landscape` and `--profile` were
+/// accepted and did nothing). Options with a default value (`--grid`,
+/// `--refine`, `--phase-weight`) cannot be told apart from their default
+/// here and are documented as sweep options in `fit --help`.
+fn sweep_only_refused(args: &super::fit::Args) -> Result<(), CliError> {
+    let given: Vec<&str> = [
+        (args.landscape.is_some(), "--landscape"),
+        (args.profile, "--profile"),
+        (args.jump_weight.is_some(), "--jump-weight"),
+        (args.jump_reading.is_some(), "--jump-reading"),
+        (args.plot.is_some(), "--plot"),
+        (args.no_phase, "--no-phase"),
+        (args.phase_convention.is_some(), "--phase-convention"),
+        (args.weighting.is_some(), "--weighting"),
+    ]
+    .into_iter()
+    .filter_map(|(set, name)| set.then_some(name))
+    .collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    Err(CliError::Usage(format!(
+        "{} appl{} to sweep data, not to --phase-resonance points (one row per level: the \
+         frequency and amplitude where the phase lag is 90 deg)",
+        given.join(", "),
+        if given.len() == 1 { "ies" } else { "y" }
+    )))
 }
 
 pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
@@ -74,11 +100,6 @@ pub fn run_fit(args: &super::fit::Args, sign: SignArg) -> Result<(), CliError> {
         return Err(CliError::Usage(
             "--sign auto is not available with --integer: choose --sign hardening or softening"
                 .into(),
-        ));
-    }
-    if args.plot.is_some() {
-        return Err(CliError::Usage(
-            "--plot is not available with --phase-resonance (the table of measured and model points is printed)".into(),
         ));
     }
     check_frequency_weight(args.pr.frequency_weight)?;

@@ -750,7 +750,13 @@ pub fn fit_auto(
             reason: "must be in (0, 1)",
         });
     }
-    let max_pairs = max_pairs.max(1);
+    if max_pairs == 0 {
+        return Err(VectorFitError::BadOption {
+            name: "max_pairs",
+            value: "0".into(),
+            reason: "at least one pole pair is needed",
+        });
+    }
     let run = |n: usize| {
         let mut o = opts.clone();
         o.pole_pairs = n;

@@ -112,7 +112,7 @@ pub fn adequacy_json(id: &Identification) -> Value {
         "peak_residual_over_noise": a.peak_ratio,
         "failing_levels": a.failing.iter().map(|&i| {
             let c = &id.curves[i];
-            json!({"level": c.level, "sweep": dir_name(c.direction), "residual_over_noise": c.noise.ratio()})
+            json!({"level": c.level, "sweep": c.direction.name(), "residual_over_noise": c.noise.ratio()})
         }).collect::<Vec<_>>(),
         "message": id.adequacy_message(),
         "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL, "peaks_mean_z2": ADEQUACY_PEAKS,
@@ -122,17 +122,9 @@ pub fn adequacy_json(id: &Identification) -> Value {
             "note": "the fit fits the noise only with the jumps of these curves read as censored (the sweep left its branch before the model's fold); read exactly it does not",
             "exact_residual_over_noise": r,
             "censored": id.curves.iter().filter(|c| c.reading == nlsdof::identification::output_error::JumpReading::Censored)
-                .map(|c| json!({"level": c.level, "sweep": dir_name(c.direction)})).collect::<Vec<_>>(),
+                .map(|c| json!({"level": c.level, "sweep": c.direction.name()})).collect::<Vec<_>>(),
         })),
     })
-}
-
-fn dir_name(d: SweepDirection) -> &'static str {
-    if d == SweepDirection::Up {
-        "up"
-    } else {
-        "down"
-    }
 }
 
 /// Per-curve JSON of a staged fit: RMS, jump reading, measured and model
@@ -145,7 +137,7 @@ pub fn curves_json(id: &Identification) -> Vec<Value> {
         .zip(&id.curves)
         .map(|(l, c)| {
             json!({
-                "level": l.level, "gamma": l.gamma, "sweep": dir_name(l.direction),
+                "level": l.level, "gamma": l.gamma, "sweep": l.direction.name(),
                 "points": l.points, "rms": l.rms, "rms_normalised": l.rms_normalised,
                 "jump_reading": c.reading.name(),
                 "measured_jump_f_hz": c.measured_jump.map(hz),
@@ -266,7 +258,7 @@ pub fn curves_text(id: &Identification) -> String {
             s,
             "           {:<10} {:>5} {:>8} {:>12.4e} {:>13} {:>13} {:>12} {:>10.2} {:>12} {:>12.4e} {:>12.4e}",
             l.level,
-            dir_name(l.direction),
+            l.direction.name(),
             c.reading.name(),
             l.rms,
             f(c.measured_jump.map(hz), 3),
@@ -713,7 +705,7 @@ pub fn result_text(
             "           {:<10} {:>10.5} {:>5} {:>12.4e} {:>14.4e} {:>14} {:>14}",
             l.level,
             l.gamma,
-            dir_name(l.direction),
+            l.direction.name(),
             l.rms,
             l.rms_normalised,
             f(c.measured_jump(2.0)),

@@ -230,10 +230,7 @@ fn frf_panel(p: &FrfPlot) -> Result<Panel, ReportError> {
             .collect();
         panel.series.push(Series::new(jumps, c, Style::Arrow(2)));
     }
-    let dir = match p.direction {
-        SweepDirection::Up => "up",
-        SweepDirection::Down => "down",
-    };
+    let dir = p.direction.name();
     let swept = if marker_step > 1 {
         format!("swept points (sweep {dir}; 1 of every {marker_step} of {n_points})")
     } else {

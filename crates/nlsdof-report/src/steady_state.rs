@@ -30,10 +30,7 @@ pub fn formulation_description(f: Formulation) -> &'static str {
 
 /// `"up"` or `"down"`.
 pub fn sweep_name(d: SweepDirection) -> &'static str {
-    match d {
-        SweepDirection::Up => "up",
-        SweepDirection::Down => "down",
-    }
+    d.name()
 }
 
 /// What a sweep was asked for, as its reports state it.

@@ -74,6 +74,16 @@ pub enum SweepDirection {
     Down,
 }
 
+impl SweepDirection {
+    /// `"up"` or `"down"`, as reports and data files name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SweepDirection::Up => "up",
+            SweepDirection::Down => "down",
+        }
+    }
+}
+
 /// One steady state (a root of the harmonic-balance equation).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SteadyState {

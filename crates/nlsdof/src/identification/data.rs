@@ -98,13 +98,6 @@ pub enum DataError {
     },
 }
 
-fn dir_name(d: SweepDirection) -> &'static str {
-    match d {
-        SweepDirection::Up => "up",
-        SweepDirection::Down => "down",
-    }
-}
-
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
 /// How many times `ln` of the largest step-to-step amplitude ratio of a
@@ -209,7 +202,7 @@ impl Dataset {
                 if w[0].omega == w[1].omega {
                     return Err(DataError::DuplicateFrequency {
                         level,
-                        direction: dir_name(direction),
+                        direction: direction.name(),
                         f_hz: w[0].omega / TWO_PI,
                     });
                 }
@@ -217,7 +210,7 @@ impl Dataset {
             if rows.len() < 3 {
                 return Err(DataError::TooFewFrequencies {
                     level,
-                    direction: dir_name(direction),
+                    direction: direction.name(),
                     count: rows.len(),
                 });
             }

@@ -637,10 +637,7 @@ impl Identification {
         for &i in &self.adequacy.failing {
             let c = &self.curves[i];
             worst = worst.max(c.noise.ratio());
-            let dir = match c.direction {
-                SweepDirection::Up => "up",
-                SweepDirection::Down => "down",
-            };
+            let dir = c.direction.name();
             let both = self.curves.iter().filter(|o| o.level == c.level).count() > 1;
             let name = if both {
                 format!("{} ({dir})", c.level)
@@ -661,13 +658,7 @@ impl Identification {
                 .curves
                 .iter()
                 .filter(|c| c.reading == JumpReading::Censored)
-                .map(|c| {
-                    let dir = match c.direction {
-                        SweepDirection::Up => "up",
-                        SweepDirection::Down => "down",
-                    };
-                    format!("{} ({dir})", c.level)
-                })
+                .map(|c| format!("{} ({})", c.level, c.direction.name()))
                 .collect();
             return Some(format!(
                 "WARNING: the model fits only if the sweep{} of level{} {} left {} branch before the model's fold; \
@@ -726,6 +717,14 @@ impl Fitted {
             spec,
             objective,
         }
+    }
+
+    /// `spec` fitted on `data` with `opts` (no progress reports); `None`
+    /// when the fit fails.
+    fn fitted(data: &Dataset, spec: FitSpec, opts: &FitOptions) -> Option<Self> {
+        fit_impl(data, &spec, opts, None, &|| {})
+            .ok()
+            .map(|r| Self::from_result(r, spec))
     }
 }
 
@@ -1585,19 +1584,16 @@ fn refit_on(setup: &Setup, f: Fitted, data: &Dataset) -> Result<Fitted, Identify
     let plan = setup.plan;
     let spec = restarted(&f.spec, &f.fit.theta);
     let inactive = f.fit.inactive.clone();
-    match fit_impl(
+    match Fitted::fitted(
         data,
-        &spec,
+        spec,
         &limited(&plan.lm, plan.seed, DECISION_ITERATIONS),
-        None,
-        &|| {},
     ) {
-        Ok(r) => {
-            let mut out = Fitted::from_result(r, spec);
+        Some(mut out) => {
             out.fit.inactive = inactive;
             Ok(out)
         }
-        Err(_) => Ok(f),
+        None => Ok(f),
     }
 }
 
@@ -1664,8 +1660,7 @@ fn refine_all_points(
     let mut out = Fitted::from_result(r, spec_all.clone());
     out.objective = out.fit.objective + out.fit.phase_cost.unwrap_or(0.0);
     out.fit.inactive = winner.fit.inactive.clone();
-    if let Ok(r) = fit_impl(fit_data, &spec_all, &single, None, &|| {}) {
-        let polished = Fitted::from_result(r, spec_all);
+    if let Some(polished) = Fitted::fitted(fit_data, spec_all, &single) {
         let mut polished = continue_unfinished(setup, polished, fit_data)?;
         polished.fit.inactive = winner.fit.inactive.clone();
         if polished.objective <= out.objective {
@@ -1700,10 +1695,9 @@ fn continue_unfinished(setup: &Setup, f: Fitted, data: &Dataset) -> Result<Fitte
             break;
         }
         let spec = restarted(&f.spec, &f.fit.theta);
-        let Ok(r) = fit_impl(data, &spec, &single, None, &|| {}) else {
+        let Some(next) = Fitted::fitted(data, spec, &single) else {
             break;
         };
-        let next = Fitted::from_result(r, spec);
         if next.objective > f.objective {
             break;
         }
@@ -1737,18 +1731,16 @@ fn decide_gain(
         alt.start[GAIN] = 1.0;
     }
     let opts = limited(&plan.lm, plan.seed, DECISION_ITERATIONS);
-    let Ok(r) = fit_impl(work, &alt, &opts, None, &|| {}) else {
+    let Some(alt) = Fitted::fitted(work, alt, &opts) else {
         return Ok(best);
     };
-    let alt = Fitted::from_result(r, alt);
     let (held, mut free) = if held_now { (best, alt) } else { (alt, best) };
     // the free gain includes the held one: a free fit above the held one
     // did not reach its optimum, and is continued from the held one
     if free.objective > held.objective {
         let mut spec = restarted(&free.spec, &held.fit.theta);
         spec.start[GAIN] = 1.0;
-        if let Ok(r) = fit_impl(work, &spec, &opts, None, &|| {}) {
-            let f2 = Fitted::from_result(r, spec);
+        if let Some(f2) = Fitted::fitted(work, spec, &opts) {
             if f2.objective < free.objective {
                 free = f2;
             }
@@ -1955,10 +1947,9 @@ fn decide_readings(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted
     let mut all = restarted(&best.spec, &best.fit.theta);
     all.censored = vec![true; work.curves.len()];
     let opts = limited(&plan.lm, plan.seed, DECISION_ITERATIONS);
-    let Ok(r) = fit_impl(work, &all, &opts, None, &|| {}) else {
+    let Some(cens) = Fitted::fitted(work, all, &opts) else {
         return Ok(best);
     };
-    let cens = Fitted::from_result(r, all);
     let (_, m_cens) = comparison(work, &cens)?;
     let early = |m: &[CurveMatch], spec: &FitSpec| -> Vec<usize> {
         (0..work.curves.len())
@@ -1977,10 +1968,9 @@ fn decide_readings(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted
         for &ci in &candidates {
             spec.censored[ci] = true;
         }
-        let Ok(r) = fit_impl(work, &spec, &opts, None, &|| {}) else {
+        let Some(trial) = Fitted::fitted(work, spec, &opts) else {
             break;
         };
-        let trial = Fitted::from_result(r, spec);
         // the drop of the objective against its residual variance: on real
         // data the model's misfit, not the instrument noise, is what the
         // readings are compared by (a noise-scaled comparison was ruled by
@@ -2077,10 +2067,10 @@ fn settle_terms(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, I
             continue;
         }
         let opts = limited(&plan.lm, plan.seed, DECISION_ITERATIONS);
-        let Ok(r) = fit_impl(work, &reduced, &opts, None, &|| {}) else {
+        let Some(cand) = Fitted::fitted(work, reduced, &opts) else {
             continue;
         };
-        let cand = continue_unfinished(setup, Fitted::from_result(r, reduced), work)?;
+        let cand = continue_unfinished(setup, cand, work)?;
         let tested: Vec<usize> = [coef, exp]
             .into_iter()
             .filter(|&j| best.spec.status[j] == Status::Free)
@@ -2275,15 +2265,11 @@ fn reassign_jumps(
     }
     let plan = setup.plan;
     let spec = restarted(&moved.spec, &moved.fit.theta);
-    Ok(fit_impl(
+    Ok(Fitted::fitted(
         work,
-        &spec,
+        spec,
         &limited(&plan.lm, plan.seed, iterations),
-        None,
-        &|| {},
-    )
-    .ok()
-    .map(|r| Fitted::from_result(r, spec)))
+    ))
 }
 
 /// Stage 8: per-curve reports and the adequacy of `f` on `data`.

@@ -97,6 +97,53 @@ pub fn jump_targets(data: &Dataset) -> Vec<JumpTarget> {
         .collect()
 }
 
+/// The power-law terms of the response equation at `(Ω, a)` that the
+/// derivatives of this module share (notation of [`super::objective`]):
+/// `B = g(ρ)βa^ρ`, `K = g(η)κ(Ωa)^η`, with their factors kept for the
+/// derivatives in β, ρ, κ, η (zero when the term is absent).
+struct PowerTerms {
+    /// `ln a`, `ln Ωa`.
+    la: f64,
+    lwa: f64,
+    /// `g(ρ)`, `a^ρ`.
+    gr: f64,
+    ar: f64,
+    /// `g(η)`, `(Ωa)^η`.
+    ge: f64,
+    wae: f64,
+    /// `B`, `K`.
+    b: f64,
+    k: f64,
+}
+
+impl PowerTerms {
+    fn at(theta: &Parameters, omega: f64, a: f64) -> Self {
+        let (beta, rho, kappa, eta) = (theta[BETA], theta[RHO], theta[KAPPA], theta[ETA]);
+        let la = a.ln();
+        let lwa = (omega * a).ln();
+        let (gr, ar) = if beta != 0.0 {
+            (g_unchecked(rho), (rho * la).exp())
+        } else {
+            (0.0, 0.0)
+        };
+        let (ge, wae) = if kappa != 0.0 {
+            (g_unchecked(eta), (eta * lwa).exp())
+        } else {
+            (0.0, 0.0)
+        };
+        Self {
+            la,
+            lwa,
+            gr,
+            ar,
+            ge,
+            wae,
+            b: gr * beta * ar,
+            k: ge * kappa * wae,
+        }
+    }
+}
+
 /// Phase-quadrature frequency `Ω_pq` (rad/s) of the model θ at input
 /// `gain·gamma`, and `dΩ_pq/dθ` (module docs). `None` if the curve never
 /// meets the backbone or the 2 × 2 system is singular.
@@ -120,19 +167,16 @@ pub fn quadrature_frequency(
         theta[ETA],
         theta[GAIN],
     );
-    let la = a.ln();
-    let lwa = (w * a).ln();
-    let (gr, ar) = if beta != 0.0 {
-        (g_unchecked(rho), (rho * la).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let (ge, wae) = if kappa != 0.0 {
-        (g_unchecked(eta), (eta * lwa).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let k = ge * kappa * wae;
+    let PowerTerms {
+        la,
+        lwa,
+        gr,
+        ar,
+        ge,
+        wae,
+        k,
+        ..
+    } = PowerTerms::at(theta, w, a);
     let d = theta[DELTA] + k;
     // ∂G/∂(a, Ω)
     let g1a = if beta != 0.0 {
@@ -186,6 +230,17 @@ pub fn fold_frequency_derivatives(
     omega: f64,
     a: f64,
 ) -> Option<[f64; N_PARAMS]> {
+    frequency_derivatives_at(theta, &PowerTerms::at(theta, omega, a), gamma, omega, a)
+}
+
+/// [`fold_frequency_derivatives`] with the power-law terms at the fold given.
+fn frequency_derivatives_at(
+    theta: &Parameters,
+    t: &PowerTerms,
+    gamma: f64,
+    omega: f64,
+    a: f64,
+) -> Option<[f64; N_PARAMS]> {
     let (alpha, delta, beta, rho, kappa, eta, gain) = (
         theta[ALPHA],
         theta[DELTA],
@@ -195,21 +250,18 @@ pub fn fold_frequency_derivatives(
         theta[ETA],
         theta[GAIN],
     );
+    let &PowerTerms {
+        la,
+        lwa,
+        gr,
+        ar,
+        ge,
+        wae,
+        b,
+        k,
+    } = t;
     let w2 = omega * omega;
-    let la = a.ln();
-    let lwa = (omega * a).ln();
-    let (gr, ar) = if beta != 0.0 {
-        (g_unchecked(rho), (rho * la).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let (ge, wae) = if kappa != 0.0 {
-        (g_unchecked(eta), (eta * lwa).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let k = ge * kappa * wae;
-    let s = alpha + gr * beta * ar - w2;
+    let s = alpha + b - w2;
     let d = delta + k;
     let fw = omega * (d * d + eta * d * k - 2.0 * s);
     if !(fw.is_finite() && fw != 0.0) {
@@ -280,7 +332,8 @@ pub fn fold_derivatives(
     omega: f64,
     a: f64,
 ) -> Option<FoldDerivatives> {
-    let domega = fold_frequency_derivatives(theta, gamma, omega, a)?;
+    let terms = PowerTerms::at(theta, omega, a);
+    let domega = frequency_derivatives_at(theta, &terms, gamma, omega, a)?;
     let (alpha, delta, beta, rho, kappa, eta) = (
         theta[ALPHA],
         theta[DELTA],
@@ -289,22 +342,18 @@ pub fn fold_derivatives(
         theta[KAPPA],
         theta[ETA],
     );
+    let PowerTerms {
+        la,
+        lwa,
+        gr,
+        ar,
+        ge,
+        wae,
+        b,
+        k,
+    } = terms;
     let w = omega;
     let w2 = w * w;
-    let la = a.ln();
-    let lwa = (w * a).ln();
-    let (gr, ar) = if beta != 0.0 {
-        (g_unchecked(rho), (rho * la).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let (ge, wae) = if kappa != 0.0 {
-        (g_unchecked(eta), (eta * lwa).exp())
-    } else {
-        (0.0, 0.0)
-    };
-    let b = gr * beta * ar;
-    let k = ge * kappa * wae;
     let s = alpha + b - w2;
     let d = delta + k;
     let qa = (2.0 * rho * s * b

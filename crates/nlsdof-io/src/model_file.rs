@@ -10,14 +10,46 @@
 //! [nonlinear_damping]     # optional: c_e x'|x'|^eta
 //! coefficient = 0.0159    # c_e, N (s/m)^(eta+1)
 //! exponent = 3.0          # eta
-//! [signal]                # optional (nlsdof fit-time): recorded signals <-> model
-//! input_gain = 1.0        # gamma = input_gain * (u + input_offset)
+//! [signal]                # optional: recorded signals <-> model
+//! input_gain = 1.0        # the model sees gamma = input_gain * (u + input_offset)
 //! input_offset = 0.0      # in the input's unit
 //! output_offset = 0.0     # y = x + output_offset, in the output's unit
+//! [provenance]            # optional: where the model came from (information only)
+//! tool = "nlsdof fit"
+//! version = "0.1.0"
+//! data = "levels.csv"
+//! model = "generalised"
+//! objective = "Eq 31 output error, m^2"
+//! cost = 1.25e-9
+//! converged = true
 //! ```
+//!
+//! ## The tables and who uses them
+//!
+//! - The model (`mass`, `stiffness`, `damping`, `[nonlinear_stiffness]`,
+//!   `[nonlinear_damping]`): every command that takes `--model`, and Python
+//!   `Model.from_toml`.
+//! - `[signal]`: how a recorded input `u` drives the model and how its
+//!   output is recorded. `nlsdof fit --out` writes the forcing gain of a
+//!   stepped-sine fit here (`input_gain`; the model sees `gain * gamma`, the
+//!   levels `gamma` being the measured ones), `nlsdof fit-time --out` the
+//!   gain and both offsets of a time-domain fit. `simulate` applies all three
+//!   (`gamma = input_gain (u + input_offset)`, column `y = x + output_offset`).
+//!   The steady-state commands (`roots`, `frf`, `hb-error`, `stepped-sine`)
+//!   and Python's `sweep`, `steady_states`, `hb_error` and `stepped_sine`
+//!   apply `input_gain` to the levels given and refuse a file with a
+//!   non-zero `input_offset` (a static force shifts the equilibrium of a
+//!   nonlinear model, which a harmonic balance about zero cannot represent)
+//!   or a negative `input_gain` (an inverted input: the amplitudes of
+//!   `|gain|` but phases shifted by 180°), each with one line naming the
+//!   key. A DC `output_offset` does not change an amplitude.
+//! - `[provenance]`: written by the fitting commands, read back by Python
+//!   (`Model.provenance`) and ignored by every computation.
 //!
 //! Unknown keys are rejected (a typo must not silently drop a term). A file
 //! without `[signal]` means gain 1 and no offsets (backward compatible).
+//! `input_gain` must be finite and non-zero (negative: an inverted input,
+//! which a time-domain fit may find), the offsets finite.
 
 use crate::error::IoError;
 use nlsdof::{Model, PowerLaw};
@@ -43,6 +75,78 @@ pub struct ModelFile {
     pub nonlinear_damping: Option<TermFile>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signal: Option<SignalMap>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+}
+
+/// Where a fitted model came from (the `[provenance]` table): information
+/// only, no computation reads it. Every field is optional.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Provenance {
+    /// The command that wrote the file, e.g. `nlsdof fit`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<String>,
+    /// nlsdof's version.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub version: Option<String>,
+    /// The data the model was fitted to, as the user named it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data: Option<String>,
+    /// The model family fitted (`generalised`, `duffing`, ...).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// What `cost` measures, with its unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objective: Option<String>,
+    /// The fit's cost (see `objective`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost: Option<f64>,
+    /// Whether the fit met its convergence criterion.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
+    /// The sample range fitted (`start:end`, time-domain fits).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<String>,
+}
+
+/// Everything a model file holds: the model, the optional signal map and
+/// provenance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelDocument {
+    pub model: Model,
+    pub signal: Option<SignalMap>,
+    pub provenance: Option<Provenance>,
+}
+
+impl ModelDocument {
+    /// The model alone (no signal map, no provenance).
+    pub fn new(model: Model) -> Self {
+        Self {
+            model,
+            signal: None,
+            provenance: None,
+        }
+    }
+
+    /// The signal map, or the identity (gain 1, no offsets) without one.
+    pub fn signal_or_identity(&self) -> SignalMap {
+        self.signal.unwrap_or_default()
+    }
+
+    /// The model file text: the model with unit comments, then `[signal]`
+    /// and `[provenance]` when present. [`parse_document`] reads it back to
+    /// an equal document.
+    pub fn to_toml(&self) -> String {
+        let mut s = model_to_toml(&self.model);
+        if let Some(sig) = &self.signal {
+            s += &signal_to_toml(sig);
+        }
+        if let Some(p) = &self.provenance {
+            s += &provenance_to_toml(p);
+        }
+        s
+    }
 }
 
 /// How recorded signals map to the model (time-domain fits): the model is
@@ -88,6 +192,7 @@ impl From<&Model> for ModelFile {
             nonlinear_stiffness: t(m.nonlinear_stiffness),
             nonlinear_damping: t(m.nonlinear_damping),
             signal: None,
+            provenance: None,
         }
     }
 }
@@ -130,12 +235,9 @@ pub fn read_model(path: &Path) -> Result<Model, IoError> {
     Ok(read_model_with_signal(path)?.0)
 }
 
-/// Parses model TOML text and its optional `[signal]` table (gain and
-/// offsets must be finite, the gain non-zero).
-pub fn parse_model_with_signal(
-    text: &str,
-    path: &Path,
-) -> Result<(Model, Option<SignalMap>), IoError> {
+/// Parses a whole model file: the model, `[signal]` (gain finite and
+/// non-zero, offsets finite) and `[provenance]`.
+pub fn parse_document(text: &str, path: &Path) -> Result<ModelDocument, IoError> {
     let file: ModelFile = toml::from_str(crate::strip_bom(text)).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         message: e.message().to_string(),
@@ -164,16 +266,44 @@ pub fn parse_model_with_signal(
             });
         }
     }
-    Ok((model, file.signal))
+    if let Some(c) = file.provenance.as_ref().and_then(|p| p.cost) {
+        if !(c.is_finite() && c >= 0.0) {
+            return Err(IoError::Parse {
+                path: path.to_path_buf(),
+                message: format!("provenance.cost = {c} is not a cost (a finite number >= 0)"),
+            });
+        }
+    }
+    Ok(ModelDocument {
+        model,
+        signal: file.signal,
+        provenance: file.provenance,
+    })
 }
 
-/// Reads a model file with its optional `[signal]` table.
-pub fn read_model_with_signal(path: &Path) -> Result<(Model, Option<SignalMap>), IoError> {
+/// Reads a whole model file ([`parse_document`]).
+pub fn read_document(path: &Path) -> Result<ModelDocument, IoError> {
     let text = std::fs::read_to_string(path).map_err(|source| IoError::Read {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_model_with_signal(&text, path)
+    parse_document(&text, path)
+}
+
+/// Parses model TOML text and its optional `[signal]` table (gain and
+/// offsets must be finite, the gain non-zero).
+pub fn parse_model_with_signal(
+    text: &str,
+    path: &Path,
+) -> Result<(Model, Option<SignalMap>), IoError> {
+    let d = parse_document(text, path)?;
+    Ok((d.model, d.signal))
+}
+
+/// Reads a model file with its optional `[signal]` table.
+pub fn read_model_with_signal(path: &Path) -> Result<(Model, Option<SignalMap>), IoError> {
+    let d = read_document(path)?;
+    Ok((d.model, d.signal))
 }
 
 /// The `[signal]` table as TOML text (appended to [`model_to_toml`]).
@@ -182,6 +312,24 @@ pub fn signal_to_toml(s: &SignalMap) -> String {
         "\n[signal]                # recorded signals <-> model\ninput_gain = {:?}      # gamma = input_gain * (u + input_offset)\ninput_offset = {:?}    # input unit\noutput_offset = {:?}   # y = x + output_offset, output unit\n",
         s.input_gain, s.input_offset, s.output_offset
     )
+}
+
+/// The `[signal]` table of a stepped-sine fit: its forcing gain only.
+pub fn forcing_gain_to_toml(gain: f64) -> String {
+    format!(
+        "\n[signal]                # the fit's forcing gain: the model sees input_gain * gamma\ninput_gain = {gain:?}\n"
+    )
+}
+
+/// The `[provenance]` table as TOML text (strings escaped by the TOML
+/// serialiser).
+pub fn provenance_to_toml(p: &Provenance) -> String {
+    #[derive(Serialize)]
+    struct Wrap<'a> {
+        provenance: &'a Provenance,
+    }
+    let body = toml::to_string(&Wrap { provenance: p }).expect("a provenance serialises");
+    format!("\n# where this model came from (information only; no computation reads it)\n{body}")
 }
 
 /// Model as TOML text, with unit comments.
@@ -244,6 +392,80 @@ mod tests {
             Path::new("e.toml")
         )
         .is_err());
+    }
+
+    #[test]
+    fn every_table_round_trips() {
+        let model = Model::linear(0.3, 1234.5, 0.07)
+            .unwrap()
+            .with_stiffness(-8.5e7, 2.4)
+            .unwrap()
+            .with_damping(0.013, -0.6)
+            .unwrap();
+        let doc = ModelDocument {
+            model,
+            signal: Some(SignalMap {
+                input_gain: -1.77,
+                input_offset: 3.1e-4,
+                output_offset: -2.0e-5,
+            }),
+            provenance: Some(Provenance {
+                tool: Some("nlsdof fit".into()),
+                version: Some("0.1.0".into()),
+                data: Some("dir with \"quotes\" and \\ back\nslash".into()),
+                model: Some("generalised".into()),
+                objective: Some("Eq 31 output error, m^2".into()),
+                cost: Some(1.234_567_890_123_4e-9),
+                converged: Some(false),
+                range: Some("40650:105712".into()),
+            }),
+        };
+        let again = parse_document(&doc.to_toml(), Path::new("r.toml")).unwrap();
+        assert_eq!(again, doc);
+        // each table alone, and the stepped-sine gain table
+        for d in [
+            ModelDocument::new(model),
+            ModelDocument {
+                provenance: None,
+                ..doc.clone()
+            },
+            ModelDocument {
+                signal: None,
+                ..doc.clone()
+            },
+        ] {
+            assert_eq!(
+                parse_document(&d.to_toml(), Path::new("r.toml")).unwrap(),
+                d
+            );
+        }
+        let text = model_to_toml(&model) + &forcing_gain_to_toml(1.7712345678901234);
+        let d = parse_document(&text, Path::new("g.toml")).unwrap();
+        assert_eq!(
+            d.signal,
+            Some(SignalMap {
+                input_gain: 1.7712345678901234,
+                ..SignalMap::default()
+            })
+        );
+    }
+
+    #[test]
+    fn bad_tables_name_the_key() {
+        let base = "mass = 1.0\nstiffness = 4.0\ndamping = 0.1\n";
+        for (table, key) in [
+            ("[signal]\ninput_gain = nan\n", "signal.input_gain"),
+            ("[signal]\ninput_gain = inf\n", "signal.input_gain"),
+            ("[signal]\ninput_offset = -inf\n", "signal.input_offset"),
+            ("[signal]\noutput_offset = nan\n", "signal.output_offset"),
+            ("[signal]\ninput_gain = 0.0\n", "signal.input_gain"),
+            ("[provenance]\ncost = -1.0\n", "provenance.cost"),
+            ("[provenance]\ncost = nan\n", "provenance.cost"),
+            ("[provenance]\nwho = \"me\"\n", "who"),
+        ] {
+            let e = parse_document(&format!("{base}{table}"), Path::new("b.toml")).unwrap_err();
+            assert!(e.to_string().contains(key), "{table}: {e}");
+        }
     }
 
     #[test]

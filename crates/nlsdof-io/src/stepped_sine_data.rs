@@ -205,6 +205,17 @@ pub fn read_csv(path: &Path, opts: &ReadOptions) -> Result<Dataset, SteppedSineD
     parse_csv(&text, path, opts)
 }
 
+/// How a fit names beam-directory data (the model file's
+/// `provenance.data`): `DIR (beam directory, runs R)`.
+pub fn beam_source_name(dir: &Path, runs: Runs) -> String {
+    let r = match runs {
+        Runs::Up => "up",
+        Runs::Down => "down",
+        Runs::Both => "both",
+    };
+    format!("{} (beam directory, runs {r})", dir.display())
+}
+
 /// The level in g from a beam file name `frf_<A>g.txt`.
 pub fn beam_level_g(file_name: &str) -> Option<f64> {
     let s = file_name

@@ -26,6 +26,9 @@ use std::path::PathBuf;
 #[derive(Clone)]
 pub struct SteppedSineData {
     pub inner: Dataset,
+    /// Where the data came from, as a fit's model file names it (None for
+    /// columns).
+    pub source: Option<String>,
 }
 
 impl SteppedSineData {
@@ -112,13 +115,17 @@ pub fn read_stepped_sine(
 ) -> PyResult<SteppedSineData> {
     let opts = read_options(velocity, acceleration, gamma_in_g, peak_to_peak)?;
     let inner = data_io::read_csv(&path, &opts).map_err(value_error)?;
-    Ok(SteppedSineData { inner })
+    Ok(SteppedSineData {
+        inner,
+        source: Some(path.display().to_string()),
+    })
 }
 
 /// Reads a beam directory of Polytec `frf_<A>g.txt` exports (as `nlsdof fit
-/// --beam-dir`); `runs`: "up", "down" or "both".
+/// --beam-dir`); `runs`: "up" (default, as the CLI's `--runs`), "down" or
+/// "both".
 #[pyfunction]
-#[pyo3(signature = (path, runs="both"))]
+#[pyo3(signature = (path, runs="up"))]
 pub fn read_beam_dir(path: PathBuf, runs: &str) -> PyResult<SteppedSineData> {
     let runs = match runs.to_ascii_lowercase().as_str() {
         "up" => Runs::Up,
@@ -131,7 +138,10 @@ pub fn read_beam_dir(path: PathBuf, runs: &str) -> PyResult<SteppedSineData> {
         }
     };
     let inner = data_io::read_beam_dir(&path, runs).map_err(value_error)?;
-    Ok(SteppedSineData { inner })
+    Ok(SteppedSineData {
+        inner,
+        source: Some(data_io::beam_source_name(&path, runs)),
+    })
 }
 
 fn read_options(
@@ -160,13 +170,13 @@ fn read_options(
 /// The data argument of `fit`: `SteppedSineData`, a path, or a mapping of
 /// columns (`level`, `gamma`, `f_hz`, `amplitude`, optional `phase_deg`,
 /// `sweep`, `weight`), each a sequence or numpy array of one length.
-fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<Dataset> {
+fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<(Dataset, Option<String>)> {
     if let Ok(d) = obj.cast::<SteppedSineData>() {
-        return Ok(d.get().inner.clone());
+        return Ok((d.get().inner.clone(), d.get().source.clone()));
     }
     if let Ok(p) = obj.extract::<PathBuf>() {
         let inner = data_io::read_csv(&p, &ReadOptions::default()).map_err(value_error)?;
-        return Ok(inner);
+        return Ok((inner, Some(p.display().to_string())));
     }
     // a dict, a pandas DataFrame, or anything with `name in obj` and `obj[name]`
     let columns = obj.hasattr("__contains__")? && obj.hasattr("__getitem__")?;
@@ -243,7 +253,9 @@ fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<Dataset> {
             data_io::record(&opts, &row).map_err(|e| value_error(format!("data: row {i}: {e}")))?,
         );
     }
-    Dataset::from_records(&recs).map_err(|e| value_error(format!("data: {e}")))
+    Dataset::from_records(&recs)
+        .map(|d| (d, None))
+        .map_err(|e| value_error(format!("data: {e}")))
 }
 
 /// Fits a power-law model to stepped-sine amplitude curves at several
@@ -259,11 +271,13 @@ fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<Dataset> {
 /// physical values (only ratios to m are identifiable from base
 /// acceleration). `fix`: {name: value} (alpha, delta, beta, kappa, rho,
 /// eta, gain; m or mass); `free`: [names]; `bounds`: {name: (lo, hi)};
-/// `sign`: "auto", "hardening", "softening"; `phase`: "auto", "ignore" or
+/// `sign`: as the CLI's `--sign`: "data" (default: the sign of the
+/// branch-free equation-error estimate), "hardening", "softening", or
+/// "auto" (fit both signs, keep the lower objective); `phase`: "auto", "ignore" or
 /// (lag|lead, offset_deg, delay_s); `weighting`: "absolute" (Eq 31) or
 /// "relative"; `jump_weight`: None (auto), 0 (off) or lambda.
 #[pyfunction]
-#[pyo3(signature = (data, model="generalised", *, mass=None, fix=None, free=None, bounds=None, sign="auto", phase=None, phase_weight=None, weighting="absolute", jump_weight=None, grid=None, refine=None, starts=1, seed=0))]
+#[pyo3(signature = (data, model="generalised", *, mass=None, fix=None, free=None, bounds=None, sign="data", phase=None, phase_weight=None, weighting="absolute", jump_weight=None, grid=None, refine=None, starts=1, seed=1))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -290,7 +304,7 @@ pub fn fit(
             all.join(", ")
         ))
     })?;
-    let data = dataset(data)?;
+    let (data, source) = dataset(data)?;
     let mut plan = FitPlan::new(kind);
     let mut mass = mass;
     let mut fixes: Vec<(String, f64)> = fix.unwrap_or_default().into_iter().collect();
@@ -322,12 +336,14 @@ pub fn fit(
         .map(|(n, (lo, hi))| (n.to_ascii_lowercase(), lo, hi))
         .collect();
     plan.sign = match sign.to_ascii_lowercase().as_str() {
-        "auto" => SignChoice::Auto,
+        // one to one with the CLI's --sign data|hardening|softening|auto
+        "data" => SignChoice::Auto,
+        "auto" => SignChoice::Both,
         "hardening" => SignChoice::Hardening,
         "softening" => SignChoice::Softening,
         _ => {
             return Err(value_error(format!(
-                "sign {sign:?} is not allowed: use \"auto\", \"hardening\" or \"softening\""
+                "sign {sign:?} is not allowed: use \"data\", \"hardening\", \"softening\" or \"auto\" (both signs)"
             )))
         }
     };
@@ -381,7 +397,12 @@ pub fn fit(
         .model()
         .to_physical(mass.unwrap_or(1.0))
         .map_err(value_error)?;
-    Ok(FitResult { id, mass, physical })
+    Ok(FitResult {
+        id,
+        mass,
+        physical,
+        source,
+    })
 }
 
 /// `phase=`: None/"auto", "ignore", or (lag|lead, offset_deg[, delay_s]).
@@ -433,6 +454,8 @@ pub struct FitResult {
     id: Identification,
     mass: Option<f64>,
     physical: nlsdof::Model,
+    /// The data's source, as the model file's provenance names it.
+    source: Option<String>,
 }
 
 #[pymethods]
@@ -518,6 +541,15 @@ impl FitResult {
     fn model(&self) -> crate::model::Model {
         crate::model::Model {
             inner: self.physical,
+            // the fit's forcing gain: model.sweep(gamma) reproduces the fit's curves
+            signal: Some(nlsdof_io::model_file::SignalMap {
+                input_gain: self.id.fit.theta[nlsdof::identification::models::GAIN],
+                ..Default::default()
+            }),
+            provenance: Some(nlsdof_report::fit::provenance(
+                &self.id.fit,
+                self.source.as_deref(),
+            )),
         }
     }
     /// The document of `nlsdof fit --json` (same keys and numbers).
@@ -528,7 +560,8 @@ impl FitResult {
     }
     /// The model file of `nlsdof fit --out` (TOML, with its header).
     fn to_toml(&self) -> PyResult<String> {
-        nlsdof_report::fit::model_file_text(&self.id.fit, self.mass).map_err(value_error)
+        nlsdof_report::fit::model_file_text(&self.id.fit, self.mass, self.source.as_deref())
+            .map_err(value_error)
     }
     /// Output-error profile-likelihood 95 % interval of a free exponent
     /// (`"rho"` or `"eta"`): refits with the exponent held, walked out from

@@ -7,6 +7,7 @@ use crate::convert::{to_py, value_error};
 use nlsdof::simulation::{simulate_record, RecordMethod, Sample, State};
 use nlsdof::stepped_sine::{run_sweeps, RigOptions};
 use nlsdof::{level_responses, ForcedResponse};
+use nlsdof_io::model_file::{ModelDocument, Provenance, SignalMap};
 use nlsdof_report::steady_state::{sweep_json, SweepRequest};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -25,43 +26,205 @@ type Trajectory<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 /// c in N s/m, k_r in N/m^(1+rho), c_e in N (s/m)^(1+eta); exponents > -3.
 /// Input levels gamma are accelerations in m/s^2 and amplitudes are in m,
 /// both zero-to-peak; frequencies are in Hz.
-#[pyclass(frozen, name = "Model", module = "nlsdof")]
-#[derive(Clone)]
+///
+/// `signal` (optional, a dict as the model file's `[signal]` table):
+/// `input_gain` (default 1), `input_offset`, `output_offset` (default 0).
+/// The model sees `gamma = input_gain * (u + input_offset)`: the forcing
+/// gain of a stepped-sine fit (`FitResult.model` carries it), the signal
+/// map of a time-domain fit. `sweep`, `steady_states`, `harmonic_sweep`,
+/// `hb_error` and `stepped_sine` apply `input_gain` to the levels given
+/// (and refuse a non-zero `input_offset` or a negative gain, as the CLI);
+/// `simulate` applies gain and input offset (the recorded output is
+/// `x + output_offset`). Models pickle, deep-copy and compare by value.
+#[pyclass(frozen, eq, name = "Model", module = "nlsdof")]
+#[derive(Clone, PartialEq)]
 pub struct Model {
     pub inner: nlsdof::Model,
+    pub signal: Option<SignalMap>,
+    pub provenance: Option<Provenance>,
+}
+
+impl Model {
+    /// A model without signal map or provenance.
+    pub fn plain(inner: nlsdof::Model) -> Self {
+        Self {
+            inner,
+            signal: None,
+            provenance: None,
+        }
+    }
+
+    fn document(&self) -> ModelDocument {
+        ModelDocument {
+            model: self.inner,
+            signal: self.signal,
+            provenance: self.provenance.clone(),
+        }
+    }
+
+    /// The input gain a steady-state computation applies to its levels;
+    /// refuses what a harmonic balance about zero cannot apply (the CLI's
+    /// rule, `nlsdof frf --help`).
+    fn steady_gain(&self) -> PyResult<f64> {
+        let s = self.signal.unwrap_or_default();
+        if s.input_offset != 0.0 {
+            return Err(value_error(format!(
+                "signal input_offset = {:?} is a static force, which shifts the equilibrium of a nonlinear model; the steady-state (harmonic balance) methods cannot apply it: use simulate(), or a model without it",
+                s.input_offset
+            )));
+        }
+        if s.input_gain < 0.0 {
+            return Err(value_error(format!(
+                "signal input_gain = {:?} < 0 inverts the input; the steady-state methods need a gain > 0",
+                s.input_gain
+            )));
+        }
+        Ok(s.input_gain)
+    }
+}
+
+/// A `(coefficient, exponent)` pair from any sequence of two numbers.
+fn pair(v: Option<Vec<f64>>, name: &str) -> PyResult<Option<(f64, f64)>> {
+    match v {
+        None => Ok(None),
+        Some(v) if v.len() == 2 => Ok(Some((v[0], v[1]))),
+        Some(v) => Err(value_error(format!(
+            "{name} must be a pair (coefficient, exponent), got {} values",
+            v.len()
+        ))),
+    }
+}
+
+/// The `[signal]` table from a dict.
+fn signal_from(d: &Bound<'_, pyo3::types::PyDict>) -> PyResult<SignalMap> {
+    let mut s = SignalMap::default();
+    for (k, v) in d.iter() {
+        let key: String = k.extract()?;
+        let val: f64 = v
+            .extract()
+            .map_err(|_| value_error(format!("signal[{key:?}] must be a number")))?;
+        match key.as_str() {
+            "input_gain" => s.input_gain = val,
+            "input_offset" => s.input_offset = val,
+            "output_offset" => s.output_offset = val,
+            other => {
+                return Err(value_error(format!(
+                    "signal has no key {other:?}: use input_gain, input_offset, output_offset"
+                )))
+            }
+        }
+    }
+    for (name, v) in [
+        ("input_gain", s.input_gain),
+        ("input_offset", s.input_offset),
+        ("output_offset", s.output_offset),
+    ] {
+        if !v.is_finite() {
+            return Err(value_error(format!("signal {name} = {v} is not finite")));
+        }
+    }
+    if s.input_gain == 0.0 {
+        return Err(value_error(
+            "signal input_gain = 0 would disconnect the input",
+        ));
+    }
+    Ok(s)
 }
 
 #[pymethods]
 impl Model {
     #[new]
-    #[pyo3(signature = (mass, stiffness, damping, nonlinear_stiffness=None, nonlinear_damping=None))]
+    #[pyo3(signature = (mass, stiffness, damping, nonlinear_stiffness=None, nonlinear_damping=None, signal=None))]
     fn new(
         mass: f64,
         stiffness: f64,
         damping: f64,
-        nonlinear_stiffness: Option<(f64, f64)>,
-        nonlinear_damping: Option<(f64, f64)>,
+        nonlinear_stiffness: Option<Vec<f64>>,
+        nonlinear_damping: Option<Vec<f64>>,
+        signal: Option<&Bound<'_, pyo3::types::PyDict>>,
     ) -> PyResult<Self> {
         let mut m = nlsdof::Model::linear(mass, stiffness, damping).map_err(value_error)?;
-        if let Some((k_r, rho)) = nonlinear_stiffness {
+        if let Some((k_r, rho)) = pair(nonlinear_stiffness, "nonlinear_stiffness")? {
             m = m.with_stiffness(k_r, rho).map_err(value_error)?;
         }
-        if let Some((c_e, eta)) = nonlinear_damping {
+        if let Some((c_e, eta)) = pair(nonlinear_damping, "nonlinear_damping")? {
             m = m.with_damping(c_e, eta).map_err(value_error)?;
         }
-        Ok(Self { inner: m })
+        Ok(Self {
+            inner: m,
+            signal: signal.map(signal_from).transpose()?,
+            provenance: None,
+        })
     }
 
-    /// Reads a model file (TOML, SI units; the format of `nlsdof --help`).
+    /// Reads a model file (TOML, SI units; the format of `nlsdof --help`)
+    /// with its `[signal]` and `[provenance]` tables.
     #[staticmethod]
     fn from_toml(path: PathBuf) -> PyResult<Self> {
-        let inner = nlsdof_io::model_file::read_model(&path).map_err(value_error)?;
-        Ok(Self { inner })
+        let d = nlsdof_io::model_file::read_document(&path).map_err(value_error)?;
+        Ok(Self {
+            inner: d.model,
+            signal: d.signal,
+            provenance: d.provenance,
+        })
     }
 
-    /// The model file (TOML) of this model.
+    /// Parses model-file text (as `to_toml()` writes it).
+    #[staticmethod]
+    fn from_toml_str(text: &str) -> PyResult<Self> {
+        let d = nlsdof_io::model_file::parse_document(text, std::path::Path::new("<string>"))
+            .map_err(value_error)?;
+        Ok(Self {
+            inner: d.model,
+            signal: d.signal,
+            provenance: d.provenance,
+        })
+    }
+
+    /// The model file (TOML) of this model, with its `[signal]` and
+    /// `[provenance]` tables; `from_toml_str` reads it back to an equal model.
     fn to_toml(&self) -> String {
-        nlsdof_io::model_file::model_to_toml(&self.inner)
+        self.document().to_toml()
+    }
+
+    /// Pickling and `copy.deepcopy`: the model file text, which round-trips
+    /// every number exactly.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let ctor = slf.get_type().getattr("from_toml_str")?;
+        Ok((ctor, (slf.get().to_toml(),)))
+    }
+
+    /// The `[signal]` table as a dict (`input_gain`, `input_offset`,
+    /// `output_offset`), or None.
+    #[getter]
+    fn signal<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
+        self.signal
+            .map(|s| {
+                let d = pyo3::types::PyDict::new(py);
+                d.set_item("input_gain", s.input_gain)?;
+                d.set_item("input_offset", s.input_offset)?;
+                d.set_item("output_offset", s.output_offset)?;
+                Ok(d)
+            })
+            .transpose()
+    }
+    /// The input gain the model applies to every level and input (1 without
+    /// a `[signal]` table).
+    #[getter]
+    fn input_gain(&self) -> f64 {
+        self.signal.unwrap_or_default().input_gain
+    }
+    /// The `[provenance]` table (tool, version, data, model, objective,
+    /// cost, converged, range) as a dict, or None.
+    #[getter]
+    fn provenance<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.provenance
+            .as_ref()
+            .map(|p| {
+                let v = serde_json::to_value(p).map_err(value_error)?;
+                to_py(py, &v)
+            })
+            .transpose()
     }
 
     /// Mass m, kg.
@@ -109,8 +272,15 @@ impl Model {
             Some((c, e)) => format!("({c:?}, {e:?})"),
             None => "None".into(),
         };
+        let signal = match self.signal {
+            None => String::new(),
+            Some(s) => format!(
+                ", signal={{'input_gain': {:?}, 'input_offset': {:?}, 'output_offset': {:?}}}",
+                s.input_gain, s.input_offset, s.output_offset
+            ),
+        };
         format!(
-            "Model(mass={:?}, stiffness={:?}, damping={:?}, nonlinear_stiffness={}, nonlinear_damping={})",
+            "Model(mass={:?}, stiffness={:?}, damping={:?}, nonlinear_stiffness={}, nonlinear_damping={}{signal})",
             self.inner.mass,
             self.inner.stiffness,
             self.inner.damping,
@@ -133,9 +303,10 @@ impl Model {
     ) -> PyResult<Vec<SteadyState>> {
         let form = crate::convert::formulation(formulation)?;
         let model = &self.inner;
+        let gain = self.steady_gain()?;
         let set = py
             .detach(|| {
-                let r = ForcedResponse::new(model, gamma, form)?;
+                let r = ForcedResponse::new(model, gain * gamma, form)?;
                 r.steady_states(TAU * f_hz)
             })
             .map_err(value_error)?;
@@ -151,7 +322,8 @@ impl Model {
     }
 
     /// A stepped-sine sweep at level `gamma` (m/s^2, zero-to-peak) over the
-    /// frequencies `f_hz` (Hz, increasing), `direction` "up" or "down": the
+    /// frequencies `f_hz` (Hz; increasing, or decreasing for a sweep down as it is
+    /// written), `direction` "up" or "down": the
     /// branch a sweep follows, with its jumps and folds (as `nlsdof frf`).
     /// With a sequence of levels, one `Sweep` per level (computed in
     /// parallel).
@@ -166,13 +338,21 @@ impl Model {
     ) -> PyResult<Bound<'py, PyAny>> {
         let dir = crate::convert::direction(direction)?;
         let form = crate::convert::formulation(formulation)?;
-        let req = SweepArgs::new(gamma, f_hz)?;
+        let req = SweepArgs::new(gamma, f_hz, dir)?;
         let model = &self.inner;
+        let gain = self.steady_gain()?;
+        let model_gammas: Vec<f64> = req.gammas.iter().map(|g| gain * g).collect();
         let levels = py
-            .detach(|| level_responses(model, &req.gammas, &req.omegas, dir, form))
+            .detach(|| level_responses(model, &model_gammas, &req.omegas, dir, form))
             .map_err(value_error)?;
         let out: Vec<Sweep> = levels
             .into_iter()
+            .zip(&req.gammas)
+            .map(|(mut level, &g)| {
+                // the level as given; the model saw gain * gamma
+                level.gamma = g;
+                level
+            })
             .map(|level| Sweep {
                 model: self.inner,
                 level,
@@ -199,13 +379,15 @@ impl Model {
         direction: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let dir = crate::convert::direction(direction)?;
-        let req = SweepArgs::new(gamma, f_hz)?;
+        let req = SweepArgs::new(gamma, f_hz, dir)?;
         let model = &self.inner;
+        let gain = self.steady_gain()?;
+        let model_gammas: Vec<f64> = req.gammas.iter().map(|g| gain * g).collect();
         let levels = py
             .detach(|| {
                 nlsdof::multi_harmonic::level_sweeps(
                     model,
-                    &req.gammas,
+                    &model_gammas,
                     &req.omegas,
                     dir,
                     harmonics,
@@ -214,6 +396,11 @@ impl Model {
             .map_err(value_error)?;
         let out: Vec<HarmonicSweep> = levels
             .into_iter()
+            .zip(&req.gammas)
+            .map(|(mut level, &g)| {
+                level.gamma = g;
+                level
+            })
             .map(|level| HarmonicSweep {
                 model: self.inner,
                 level,
@@ -258,11 +445,12 @@ impl Model {
             .filter(|&h| h <= h_max)
             .collect();
         let n = self.inner.normalised().map_err(value_error)?;
+        let gain = self.steady_gain()?;
         let study = py
             .detach(|| {
                 truncation_study(
                     &n,
-                    gamma,
+                    gain * gamma,
                     TAU * f0,
                     TAU * f1,
                     &ladder,
@@ -288,8 +476,10 @@ impl Model {
     /// `samples_per_step=1|2` drives RK4 by the samples themselves) or
     /// "dopri" (adaptive Dormand-Prince 5(4), `rtol`, `atol`). `base=True`:
     /// `u` is a base acceleration and x the relative displacement (the
-    /// structure sees -u). Returns numpy arrays (x, v) at every sample, in m
-    /// and m/s; the same numbers as `nlsdof simulate`.
+    /// structure sees -u). With a `signal` map the model sees
+    /// `input_gain * (u + input_offset)` (as `nlsdof simulate`; the recorded
+    /// output is `x + signal["output_offset"]`). Returns numpy arrays (x, v)
+    /// at every sample, in m and m/s; the same numbers as `nlsdof simulate`.
     #[pyo3(signature = (u, fs, method="rk4", base=false, x0=0.0, v0=0.0, samples_per_step=None, rtol=1e-10, atol=1e-13))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
@@ -323,8 +513,15 @@ impl Model {
             }
         };
         let arr = f64_array(u, "u")?;
-        let u = values(&arr);
-        let gain = if base { -1.0 } else { 1.0 };
+        let mut u = values(&arr);
+        let map = self.signal.unwrap_or_default();
+        let gain = if base { -1.0 } else { 1.0 } * map.input_gain;
+        if map.input_offset != 0.0 {
+            // as `nlsdof simulate`: the offset is added to the samples
+            for v in u.to_mut().iter_mut() {
+                *v += map.input_offset;
+            }
+        }
         let model = &self.inner;
         let (x, v) = py
             .detach(|| {
@@ -360,10 +557,7 @@ impl Model {
     ) -> PyResult<RigSweep> {
         let dir = crate::convert::direction(direction)?;
         let f = f64_array(f_hz, "f_hz")?;
-        let omegas: Vec<f64> = values(&f).iter().map(|f| TAU * f).collect();
-        if omegas.is_empty() {
-            return Err(value_error("f_hz is empty: give at least one frequency"));
-        }
+        let omegas = sweep_omegas(&values(&f), dir)?;
         let opts = RigOptions {
             samples_per_cycle,
             tolerance,
@@ -371,8 +565,9 @@ impl Model {
             ..RigOptions::default()
         };
         let model = &self.inner;
+        let gain = self.steady_gain()?;
         let sweeps = py
-            .detach(|| run_sweeps(model, &[gamma], &omegas, &[dir], &opts, &|| {}))
+            .detach(|| run_sweeps(model, &[gain * gamma], &omegas, &[dir], &opts, &|| {}))
             .map_err(value_error)?;
         let Some(s) = sweeps.into_iter().next() else {
             return Err(value_error("the rig returned no sweep"));
@@ -408,22 +603,71 @@ struct SweepArgs {
     band: (f64, f64, usize),
 }
 
+/// The frequencies of a sweep (Hz) as increasing angular frequencies:
+/// finite, > 0 and strictly increasing, or, for a down-sweep, strictly
+/// decreasing as a sweep down is written (then reversed: the sweep runs
+/// down either way). Every message is in Hz, as given.
+fn sweep_omegas(f: &[f64], dir: nlsdof::SweepDirection) -> PyResult<Vec<f64>> {
+    if f.is_empty() {
+        return Err(value_error("f_hz is empty: give at least one frequency"));
+    }
+    for (i, &x) in f.iter().enumerate() {
+        if !(x.is_finite() && x > 0.0) {
+            return Err(value_error(format!(
+                "f_hz[{i}] = {x} Hz: every frequency must be finite and > 0"
+            )));
+        }
+    }
+    let increasing = f.windows(2).all(|w| w[1] > w[0]);
+    let decreasing = f.windows(2).all(|w| w[1] < w[0]);
+    let mut f = f.to_vec();
+    if !increasing {
+        if decreasing && dir == nlsdof::SweepDirection::Down {
+            f.reverse();
+        } else {
+            let i = (1..f.len())
+                .find(|&i| {
+                    if dir == nlsdof::SweepDirection::Down && f[1] < f[0] {
+                        f[i] >= f[i - 1]
+                    } else {
+                        f[i] <= f[i - 1]
+                    }
+                })
+                .unwrap_or(1);
+            let want = if dir == nlsdof::SweepDirection::Down {
+                "strictly increasing or strictly decreasing"
+            } else {
+                "strictly increasing (for a sweep down, pass direction=\"down\")"
+            };
+            return Err(value_error(format!(
+                "f_hz[{i}] = {} Hz after f_hz[{}] = {} Hz: the frequencies must be {want}",
+                f[i],
+                i - 1,
+                f[i - 1]
+            )));
+        }
+    }
+    Ok(f.iter().map(|x| TAU * x).collect())
+}
+
 impl SweepArgs {
-    fn new(gamma: &Bound<'_, PyAny>, f_hz: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn new(
+        gamma: &Bound<'_, PyAny>,
+        f_hz: &Bound<'_, PyAny>,
+        dir: nlsdof::SweepDirection,
+    ) -> PyResult<Self> {
         let (gammas, one) = match gamma.extract::<f64>() {
             Ok(g) => (vec![g], true),
             Err(_) => (values(&f64_array(gamma, "gamma")?).into_owned(), false),
         };
         let f = f64_array(f_hz, "f_hz")?;
-        let f = values(&f);
-        if f.is_empty() {
-            return Err(value_error("f_hz is empty: give at least one frequency"));
-        }
+        let omegas = sweep_omegas(&values(&f), dir)?;
+        let n = omegas.len();
         Ok(Self {
             gammas,
             one,
-            omegas: f.iter().map(|f| TAU * f).collect(),
-            band: (f[0], f[f.len() - 1], f.len()),
+            band: (omegas[0] / TAU, omegas[n - 1] / TAU, n),
+            omegas,
         })
     }
 
@@ -588,6 +832,7 @@ impl Sweep {
             steps: self.band.2,
             f_min: self.band.0,
             f_max: self.band.1,
+            at: None,
         };
         let doc = sweep_json(&req, &self.model, std::slice::from_ref(&self.level));
         to_py(py, &doc["levels"][0])

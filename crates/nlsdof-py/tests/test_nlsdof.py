@@ -78,6 +78,86 @@ def test_model_properties_and_toml_round_trip(tmp_path):
     assert "Model(mass=0.26699" in repr(m)
 
 
+def test_a_model_is_a_value_with_its_tables(tmp_path):
+    import copy
+    import pickle
+
+    m = nlsdof.Model(
+        0.3,
+        1234.5,
+        0.07,
+        nonlinear_stiffness=[-8.5e7, 2.4],  # any sequence, not only a tuple
+        nonlinear_damping=np.array([0.013, 0.6]),
+        signal={"input_gain": 1.77, "input_offset": 3.1e-4, "output_offset": -2e-5},
+    )
+    assert m.nonlinear_stiffness == (-8.5e7, 2.4)
+    assert m.input_gain == 1.77
+    assert m.signal == {"input_gain": 1.77, "input_offset": 3.1e-4, "output_offset": -2e-5}
+    assert m == nlsdof.Model.from_toml_str(m.to_toml())
+    assert m == pickle.loads(pickle.dumps(m)) == copy.deepcopy(m)
+    assert m != nlsdof.Model(0.3, 1234.5, 0.07)
+    assert nlsdof.Model(1, 2, 0.1) == nlsdof.Model(1.0, 2.0, 0.1)
+    assert "signal={'input_gain': 1.77" in repr(m)
+    # the file keeps every table
+    path = tmp_path / "m.toml"
+    path.write_text(m.to_toml())
+    assert nlsdof.Model.from_toml(path) == m
+    with pytest.raises(ValueError, match="nonlinear_stiffness"):
+        nlsdof.Model(1, 2, 0.1, nonlinear_stiffness=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="input_gain"):
+        nlsdof.Model(1, 2, 0.1, signal={"input_gain": float("nan")})
+    with pytest.raises(ValueError, match="gain"):
+        nlsdof.Model(1, 2, 0.1, signal={"gain": 2.0})
+
+
+def test_the_signal_table_is_applied_as_on_the_cli(cli, tmp_path):
+    base = dict(mass=0.5, stiffness=2000.0, damping=0.3, nonlinear_stiffness=(4.0e7, 2.0))
+    plain = nlsdof.Model(**base)
+    gained = nlsdof.Model(**base, signal={"input_gain": 2.0})
+    f = np.linspace(8.0, 14.0, 40)
+    a, b = gained.sweep(0.4, f), plain.sweep(0.8, f)
+    assert np.array_equal(a.amplitude, b.amplitude)
+    assert a.gamma == 0.4
+    s = gained.steady_states(0.4, 10.5)
+    assert [x.amplitude for x in s] == [x.amplitude for x in plain.steady_states(0.8, 10.5)]
+    # the CLI reads the same file and gives the same curves
+    path = tmp_path / "gained.toml"
+    path.write_text(gained.to_toml())
+    out = run_cli(cli, "frf", "--model", path, "--gamma", "0.4", "--f-min", "8", "--f-max", "14",
+                  "--steps", "40", "--json")
+    doc = json.loads(out)
+    assert [p["amplitude"] for p in doc["levels"][0]["points"]] == list(
+        gained.sweep(0.4, np.array(cli_linspace(8.0, 14.0, 40))).amplitude
+    )
+    # simulate: gamma = input_gain * (u + input_offset)
+    u = np.sin(np.linspace(0.0, 40.0, 2000))
+    mapped = nlsdof.Model(**base, signal={"input_gain": 2.0, "input_offset": 0.05})
+    x1, _ = mapped.simulate(u, 200.0)
+    x2, _ = plain.simulate(2.0 * (u + 0.05), 200.0)
+    np.testing.assert_allclose(x1, x2, rtol=1e-12, atol=1e-15)
+    # a static input offset cannot be applied by a harmonic balance
+    with pytest.raises(ValueError, match="input_offset"):
+        mapped.sweep(0.4, f)
+
+
+def test_messages_speak_the_units_given_and_a_sweep_down_is_written_down():
+    m = nlsdof.Model.from_toml(WING)
+    with pytest.raises(ValueError) as e:
+        m.sweep(1.0, np.linspace(2.0, 1.0, 10))
+    assert "Hz" in str(e.value) and "rad/s" not in str(e.value)
+    assert "f_hz[1] = 1.88" in str(e.value) and 'direction="down"' in str(e.value)
+    # a sweep down, written from the top: the same sweep as from the bottom
+    f = np.linspace(5.2, 5.6, 50)
+    down = m.sweep(0.5, f[::-1], direction="down")
+    assert np.array_equal(down.amplitude, m.sweep(0.5, f, direction="down").amplitude)
+    assert down.f_hz[0] == f[-1]
+    with pytest.raises(ValueError, match="f_hz\\[2\\] = 5.2 Hz"):
+        m.sweep(0.5, [5.6, 5.4, 5.2, 5.3], direction="down")
+    # the sampling rate as given
+    with pytest.raises(ValueError, match="-10"):
+        m.simulate(np.zeros(100), -10.0)
+
+
 def test_linear_steady_state_closed_form():
     # x = a cos(W t - phi), a = gamma / |w_n^2 - W^2 + 2 i zeta w_n W|
     m = nlsdof.Model(mass=2.0, stiffness=2.0 * 3947.84, damping=2.0 * 1.2566)
@@ -239,8 +319,41 @@ def test_fit_equals_cli_bit_for_bit(cli, tmp_path):
     assert res.to_toml() == out.read_text()
     assert isinstance(res.model, nlsdof.Model)
     assert res.model.mass == 0.26699
+    # the model carries the forcing gain and the provenance, as the file does
+    assert res.model == nlsdof.Model.from_toml(out)
+    assert res.model.input_gain == res.parameters["gain"]["value"]
+    assert res.model.provenance["data"] == str(path)
+    assert res.model.provenance["cost"] == res.cost
+    # and reproduces the fit's model curves (the CLI's --predict), bit for bit
+    predict = tmp_path / "p.csv"
+    run_cli(cli, *args[:-1], "--predict", predict)
+    with open(predict) as fh:
+        rows = list(csv.DictReader(fh))
+    for level in sorted({r["level"] for r in rows}):
+        sel = [r for r in rows if r["level"] == level]
+        s = res.model.sweep(float(sel[0]["gamma"]), np.array([float(r["f_hz"]) for r in sel]))
+        assert list(s.amplitude) == [float(r["model_amplitude"]) for r in sel]
     assert isinstance(res.minima, list) and res.minima
     assert "cost (Eq 31)" in res.report()
+
+
+@pytest.mark.parametrize(
+    "kwargs, flags",
+    [
+        ({}, []),
+        ({"sign": "data"}, ["--sign", "data"]),
+        ({"sign": "auto"}, ["--sign", "auto"]),
+        ({"sign": "hardening", "starts": 3}, ["--sign", "hardening", "--starts", "3"]),
+        ({"free": ["gain"], "weighting": "relative"}, ["--free", "gain", "--weighting", "relative"]),
+        ({"grid": (9, 7), "refine": 2}, ["--grid", "9x7", "--refine", "2"]),
+    ],
+)
+def test_fit_options_mean_the_same_in_python_and_on_the_cli(cli, tmp_path, kwargs, flags):
+    # the same defaults (seed, starts, sign, grid) and the same meaning of each option
+    path = tmp_path / "data.csv"
+    write_data(path, wing_data())
+    doc = json.loads(run_cli(cli, "fit", path, "--model", "duffing-generalised", *flags, "--json"))
+    assert nlsdof.fit(path, model="duffing-generalised", **kwargs).to_dict() == doc
 
 
 def test_profile_equals_cli(cli, tmp_path):

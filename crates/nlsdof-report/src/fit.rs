@@ -428,12 +428,19 @@ pub fn identification_text(id: &Identification) -> String {
 }
 
 /// The `--out` model file of a fit: a header (model, cost, a note when the
-/// fit is not trustworthy, the forcing gain, the mass convention) and the
-/// physical model for `mass` (1 kg when not given).
-pub fn model_file_text(res: &FitResult, mass: Option<f64>) -> Result<String, ReportError> {
+/// fit is not trustworthy, the mass convention), the physical model for
+/// `mass` (1 kg when not given), the forcing gain as `[signal] input_gain`
+/// (the model sees `gain * gamma`: `nlsdof frf --model` and Python
+/// `Model.sweep` apply it, so the file reproduces the fit's curves) and the
+/// `[provenance]` table (`data`: the data as the user named it).
+pub fn model_file_text(
+    res: &FitResult,
+    mass: Option<f64>,
+    data: Option<&str>,
+) -> Result<String, ReportError> {
     let model = physical(res, mass.unwrap_or(1.0))?;
     let mut text = format!(
-        "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n# forcing gain = {} (the structure sees gain * gamma; not part of this file)\n",
+        "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n",
         res.kind,
         res.cost,
         if res.warning().is_some() {
@@ -441,13 +448,87 @@ pub fn model_file_text(res: &FitResult, mass: Option<f64>) -> Result<String, Rep
         } else {
             ""
         },
-        res.theta[GAIN]
     );
     if mass.is_none() {
         text.push_str("# no mass given: m = 1 kg, all values are per unit mass\n");
     }
     text.push_str(&nlsdof_io::model_file::model_to_toml(&model));
+    text.push_str(&nlsdof_io::model_file::forcing_gain_to_toml(
+        res.theta[GAIN],
+    ));
+    text.push_str(&nlsdof_io::model_file::provenance_to_toml(&provenance(
+        res, data,
+    )));
     Ok(text)
+}
+
+/// The `[provenance]` of a fit's model file (`data`: as the user named it).
+pub fn provenance(res: &FitResult, data: Option<&str>) -> nlsdof_io::model_file::Provenance {
+    nlsdof_io::model_file::Provenance {
+        tool: Some("nlsdof fit".into()),
+        version: Some(env!("CARGO_PKG_VERSION").into()),
+        data: data.map(str::to_string),
+        model: Some(res.kind.to_string()),
+        objective: Some(
+            "Eq 31: sum of squared amplitude residuals of the model's own sweeps (m^2, weighted)"
+                .into(),
+        ),
+        cost: Some(res.cost),
+        converged: Some(res.converged),
+        range: None,
+    }
+}
+
+/// The `--predict` CSV of a fit: every measured point with the model's
+/// amplitude and phase lag there (the fit's own model curves, Eq 31: the
+/// model sweep of each curve at `gain * gamma`, starting on the state nearest
+/// the measured first amplitude). Columns `level,gamma,f_hz,amplitude,sweep,
+/// model_amplitude,model_phase_deg`, plus `phase_deg` when the data have
+/// phases; SI, zero-to-peak, numbers written to round-trip exactly. Curves in
+/// data order, points by increasing frequency. The file is itself a
+/// stepped-sine data file (`nlsdof fit`, `nlsdof frf --at` read it).
+pub fn predict_csv(id: &Identification) -> Result<String, ReportError> {
+    let res = &id.fit;
+    let response = nlsdof::identification::objective::model_response(&id.data, &res.theta)?;
+    let with_phase = id.data.curves.iter().any(|c| c.phases.is_some());
+    let mut s = String::from("level,gamma,f_hz,amplitude,sweep,model_amplitude,model_phase_deg");
+    if with_phase {
+        s.push_str(",phase_deg");
+    }
+    s.push('\n');
+    let quote = |t: &str| {
+        if t.contains([',', '"', '\n', '\r']) {
+            format!("\"{}\"", t.replace('"', "\"\""))
+        } else {
+            t.to_string()
+        }
+    };
+    let mut off = 0;
+    for (c, model) in id.data.curves.iter().zip(&response) {
+        let level = quote(&c.level);
+        let dir = c.direction.name();
+        for (k, (&w, &a)) in c.omegas.iter().zip(&c.amplitudes).enumerate() {
+            // the amplitude the fit compared (bit for bit); its phase from the same sweep
+            let a_model = res.model_amplitudes[off + k];
+            let phase = model[k].1.to_degrees();
+            write!(
+                s,
+                "{level},{:?},{:?},{a:?},{dir},{a_model:?},{phase:?}",
+                c.gamma,
+                hz(w)
+            )
+            .ok();
+            if with_phase {
+                match &c.phases {
+                    Some(p) => write!(s, ",{:?}", p[k].to_degrees()).ok(),
+                    None => write!(s, ",").ok(),
+                };
+            }
+            s.push('\n');
+        }
+        off += c.omegas.len();
+    }
+    Ok(s)
 }
 
 /// Physical model for mass `m` (β, κ scaled; gain is not part of it).

@@ -44,6 +44,9 @@ pub struct SweepRequest<'a> {
     /// Band, Hz.
     pub f_min: f64,
     pub f_max: f64,
+    /// The data file whose levels, frequencies and sweep directions were
+    /// swept (`nlsdof frf --at`), instead of one grid and direction.
+    pub at: Option<&'a str>,
 }
 
 /// Six significant digits, without trailing zeros.
@@ -233,7 +236,7 @@ pub fn sweep_json(req: &SweepRequest, model: &Model, levels: &[LevelResponse]) -
             let fold_amps: Vec<f64> = l.sweep.folds.iter().map(|f| f.amplitude).collect();
             json!({
                 "gamma": l.gamma,
-                "sweep": sweep_name(req.direction),
+                "sweep": sweep_name(l.sweep.direction),
                 "points": points,
                 "jumps": jumps,
                 "folds_hz": folds,
@@ -296,16 +299,28 @@ pub fn sweep_text(req: &SweepRequest, model: &Model, levels: &[LevelResponse]) -
     let (f_min, f_max) = (req.f_min, req.f_max);
     let mut s = String::new();
     let _ = writeln!(s, "model {}: {}", req.model_name, model_summary(model));
-    let _ = writeln!(
-        s,
-        "stepped-sine sweep {}, {} .. {} Hz, {} steps; formulation {} ({})",
-        sweep_name(req.direction),
-        f_min,
-        f_max,
-        req.steps,
-        formulation_name(req.formulation),
-        formulation_description(req.formulation)
-    );
+    match req.at {
+        None => {
+            let _ = writeln!(
+                s,
+                "stepped-sine sweep {}, {} .. {} Hz, {} steps; formulation {} ({})",
+                sweep_name(req.direction),
+                f_min,
+                f_max,
+                req.steps,
+                formulation_name(req.formulation),
+                formulation_description(req.formulation)
+            );
+        }
+        Some(data) => {
+            let _ = writeln!(
+                s,
+                "stepped-sine sweeps at the levels, frequencies and sweep directions of {data} ({f_min} .. {f_max} Hz), each starting on the state nearest its measured first amplitude; formulation {} ({})",
+                formulation_name(req.formulation),
+                formulation_description(req.formulation)
+            );
+        }
+    }
     let _ = writeln!(
         s,
         "amplitudes zero-to-peak in m; phase = lag of x behind the input, deg"
@@ -314,10 +329,15 @@ pub fn sweep_text(req: &SweepRequest, model: &Model, levels: &[LevelResponse]) -
         let _ = writeln!(s);
         let _ = writeln!(
             s,
-            "level {}: gamma = {} m/s^2 zero-to-peak ({} m/s^2 peak-to-peak)",
+            "level {}: gamma = {} m/s^2 zero-to-peak ({} m/s^2 peak-to-peak){}",
             i + 1,
             l.gamma,
-            2.0 * l.gamma
+            2.0 * l.gamma,
+            if req.at.is_some() {
+                format!(", sweep {}", sweep_name(l.sweep.direction))
+            } else {
+                String::new()
+            }
         );
         let peak = l
             .sweep

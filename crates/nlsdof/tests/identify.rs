@@ -480,3 +480,61 @@ fn blind_h016() -> (Dataset, Parameters) {
     ]);
     (data, truth)
 }
+
+/// A fitted model, as its file holds it (θ at unit mass, the gain as the
+/// input gain), swept at the data's levels, frequencies and directions,
+/// gives the fit's model curves bit for bit (issue 25: a model file
+/// reproduces the fit).
+#[test]
+fn sweeps_at_the_data_reproduce_the_fit_bit_for_bit() {
+    let t = duffing_quadratic();
+    let d = data(
+        &t,
+        &[0.5, 1.0, 2.0],
+        (8.0, 14.0),
+        120,
+        &[SweepDirection::Up, SweepDirection::Down],
+        None,
+    );
+    let mut plan = FitPlan::new(ModelKind::DuffingQuadratic);
+    // a gain other than 1, so that its product with the level is exercised
+    plan.gain = GainChoice::Fixed(1.7);
+    let r = identify(&d, &plan, &|_| {}).unwrap();
+    let th = r.fit.theta;
+    assert_eq!(th[GAIN], 1.7);
+    let law = |c: f64, e: f64| {
+        (c != 0.0).then_some(nlsdof::PowerLaw {
+            coefficient: c,
+            exponent: e,
+        })
+    };
+    let model = nlsdof::Model {
+        mass: 1.0,
+        stiffness: th[ALPHA],
+        damping: th[DELTA],
+        nonlinear_stiffness: law(th[BETA], th[RHO]),
+        nonlinear_damping: law(th[KAPPA], th[ETA]),
+    };
+    let sweeps = sweeps_at_data(&model, th[GAIN], &r.data).unwrap();
+    let mut got = Vec::new();
+    for (s, c) in sweeps.iter().zip(&r.data.curves) {
+        assert_eq!(s.gamma, c.gamma);
+        let mut a: Vec<f64> = s
+            .sweep
+            .points
+            .iter()
+            .map(|p| if p.sticking { 0.0 } else { p.amplitude })
+            .collect();
+        if c.direction == SweepDirection::Down {
+            a.reverse();
+        }
+        got.extend(a);
+    }
+    assert_eq!(got.len(), r.fit.model_amplitudes.len());
+    for (k, (a, b)) in got.iter().zip(&r.fit.model_amplitudes).enumerate() {
+        assert_eq!(a.to_bits(), b.to_bits(), "point {k}: {a:e} vs {b:e}");
+    }
+    // a gain that is not a positive number is refused, naming it
+    let e = sweeps_at_data(&model, -1.0, &r.data).unwrap_err();
+    assert!(e.to_string().contains("input_gain"), "{e}");
+}

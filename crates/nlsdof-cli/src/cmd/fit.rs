@@ -58,6 +58,23 @@ pub struct DataArgs {
 }
 
 impl DataArgs {
+    /// The data as the user named them (a file, or `DIR (beam directory, runs R)`).
+    pub fn source_name(&self) -> String {
+        match (&self.beam_dir, &self.data) {
+            (Some(dir), _) => nlsdof_io::stepped_sine_data::beam_source_name(dir, self.runs()),
+            (None, Some(p)) => p.display().to_string(),
+            (None, None) => String::new(),
+        }
+    }
+
+    fn runs(&self) -> Runs {
+        match self.runs {
+            RunsArg::Up => Runs::Up,
+            RunsArg::Down => Runs::Down,
+            RunsArg::Both => Runs::Both,
+        }
+    }
+
     pub fn load(&self) -> Result<Dataset, CliError> {
         let err = |e: nlsdof_io::stepped_sine_data::SteppedSineDataError| {
             use nlsdof_io::stepped_sine_data::SteppedSineDataError as E;
@@ -75,12 +92,7 @@ impl DataArgs {
             CliError::Usage(format!("{e}{hint}"))
         };
         if let Some(dir) = &self.beam_dir {
-            let runs = match self.runs {
-                RunsArg::Up => Runs::Up,
-                RunsArg::Down => Runs::Down,
-                RunsArg::Both => Runs::Both,
-            };
-            return read_beam_dir(dir, runs).map_err(err);
+            return read_beam_dir(dir, self.runs()).map_err(err);
         }
         let path = self
             .data
@@ -191,9 +203,15 @@ pub struct Args {
     /// Take the mass from this model file.
     #[arg(long = "model-file", value_name = "FILE")]
     pub model_file: Option<PathBuf>,
-    /// Write the fitted model (TOML model format).
+    /// Write the fitted model (TOML model format, with the forcing gain as [signal]
+    /// input_gain and a [provenance] table): `frf --model` reproduces the fit's curves.
     #[arg(long, value_name = "MODEL.toml")]
     pub out: Option<PathBuf>,
+    /// Write every measured point with the model's amplitude and phase there (CSV:
+    /// level,gamma,f_hz,amplitude,sweep,model_amplitude,model_phase_deg[,phase_deg]; SI,
+    /// zero-to-peak; the fit's own model curves, Eq 31).
+    #[arg(long, value_name = "CURVES.csv")]
+    pub predict: Option<PathBuf>,
     /// Write an SVG of the data (dots) and the fitted model's sweeps (lines) per level.
     #[arg(long, value_name = "FIG.svg")]
     pub plot: Option<PathBuf>,
@@ -551,6 +569,9 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
     if let Some(p) = &args.plot {
         targets.push(("--plot", p));
     }
+    if let Some(p) = &args.predict {
+        targets.push(("--predict", p));
+    }
     if let Some(p) = &args.landscape {
         targets.push(("--landscape", p));
     }
@@ -568,7 +589,17 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
     // render everything first, then commit the files
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(out) = &args.out {
-        files.push((out.clone(), model_file_text(res, mass)?.into_bytes()));
+        let source = args.data.source_name();
+        files.push((
+            out.clone(),
+            model_file_text(res, mass, Some(&source))?.into_bytes(),
+        ));
+    }
+    if let Some(p) = &args.predict {
+        files.push((
+            p.clone(),
+            nlsdof_report::fit::predict_csv(&id)?.into_bytes(),
+        ));
     }
     if let Some(p) = &args.plot {
         files.push((p.clone(), fit_svg(&id.data, res)?.into_bytes()));

@@ -217,14 +217,25 @@ pub fn run(a: Args) -> Result<(), CliError> {
     };
     if let Some(p) = &a.out {
         let model = tm.model.to_physical(1.0)?;
+        let provenance = nlsdof_io::model_file::Provenance {
+            tool: Some("nlsdof fit-time".into()),
+            version: Some(env!("CARGO_PKG_VERSION").into()),
+            data: Some(a.input.display().to_string()),
+            model: Some(kind.to_string()),
+            objective: Some("RMS output error over the range, in the output's unit".into()),
+            cost: Some(res.rms),
+            converged: Some(res.termination.converged()),
+            range: Some(format!("{}:{}", range.start, range.end)),
+        };
         let text = format!(
-            "# fitted by `nlsdof fit-time`, model {kind}, range {}:{} of {}, RMS output error {:e}\n# m = 1 kg: all values are per unit mass; the [signal] table maps the recorded u, y\n{}{}",
+            "# fitted by `nlsdof fit-time`, model {kind}, range {}:{} of {}, RMS output error {:e}\n# m = 1 kg: all values are per unit mass; the [signal] table maps the recorded u, y\n{}{}{}",
             range.start,
             range.end,
             a.input.display(),
             res.rms,
             model_to_toml(&model),
-            signal_to_toml(&signal)
+            signal_to_toml(&signal),
+            nlsdof_io::model_file::provenance_to_toml(&provenance)
         );
         nlsdof_io::atomic::write_atomic(p, text.as_bytes())?;
     }

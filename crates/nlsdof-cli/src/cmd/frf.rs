@@ -2,7 +2,9 @@
 //! stepped-sine sweep sees them (jumps, folds, phase quadrature), as text,
 //! JSON or CSV, optionally plotted to SVG.
 
-use super::roots::{check_frequency, check_gamma, conventions_help, load_model, FormulationArg};
+use super::roots::{
+    check_frequency, check_gamma, conventions_help, gain_note, load_steady_model, FormulationArg,
+};
 use crate::error::CliError;
 use nlsdof::{level_responses, SweepDirection};
 use nlsdof_report::frf_plot as plot;
@@ -48,20 +50,41 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub model: PathBuf,
     /// Input levels gamma, m/s^2 zero-to-peak, comma-separated (each finite and > 0).
-    #[arg(long, value_name = "G1,G2,..", allow_hyphen_values = true)]
-    pub gamma: String,
+    #[arg(
+        long,
+        value_name = "G1,G2,..",
+        allow_hyphen_values = true,
+        required_unless_present = "at"
+    )]
+    pub gamma: Option<String>,
     /// Lowest frequency, Hz (> 0).
-    #[arg(long = "f-min", value_name = "F0", allow_hyphen_values = true)]
-    pub f_min: f64,
+    #[arg(
+        long = "f-min",
+        value_name = "F0",
+        allow_hyphen_values = true,
+        required_unless_present = "at"
+    )]
+    pub f_min: Option<f64>,
     /// Highest frequency, Hz (> f-min).
-    #[arg(long = "f-max", value_name = "F1", allow_hyphen_values = true)]
-    pub f_max: f64,
+    #[arg(
+        long = "f-max",
+        value_name = "F1",
+        allow_hyphen_values = true,
+        required_unless_present = "at"
+    )]
+    pub f_max: Option<f64>,
     /// Number of frequencies, linearly spaced from f-min to f-max inclusive (>= 2).
-    #[arg(long, value_name = "N")]
-    pub steps: usize,
+    #[arg(long, value_name = "N", required_unless_present = "at")]
+    pub steps: Option<usize>,
     /// Sweep direction of the stepped-sine test.
     #[arg(long, value_enum, default_value_t = SweepArg::Up)]
     pub sweep: SweepArg,
+    /// Sweep at the levels, frequencies and sweep directions of a stepped-sine data file
+    /// (long CSV level,gamma,f_hz,amplitude[,sweep], SI zero-to-peak, as `fit` reads it or
+    /// `fit --predict` writes it), each sweep starting on the state nearest its measured first
+    /// amplitude: the curves a fit compares with the data (see PREDICTING DATA below).
+    #[arg(long, value_name = "DATA.csv", conflicts_with_all = ["gamma", "f_min", "f_max", "steps", "sweep", "harmonics", "formulation"])]
+    pub at: Option<PathBuf>,
     /// Steady-state equation: exact harmonic balance or the paper's Eq 30.
     #[arg(long, value_enum, default_value_t = FormulationArg::Hb)]
     pub formulation: FormulationArg,
@@ -110,6 +133,21 @@ OUTPUT:
         unstable dashed, backbone dotted grey, swept points as markers, jumps as arrows.
         The plot is written atomically: on any error no file is created.
 
+MODEL FILE [signal] TABLE:
+  A model file written by `nlsdof fit --out` holds the fit's forcing gain as
+  [signal] input_gain: the model sees input_gain * gamma, and the levels you give
+  (and report) are the measured ones. A non-zero input_offset (a static force) or a
+  negative input_gain is refused with one line naming the key.
+
+PREDICTING DATA (--at DATA.csv):
+  Instead of --gamma/--f-min/--f-max/--steps/--sweep, sweep at exactly the levels,
+  frequencies and directions of a data file, each sweep starting on the stable state
+  nearest its measured first amplitude (as `nlsdof fit` computes its model curves, Eq 31).
+  With the model file of a fit, the amplitudes equal the fit's model curves bit for bit:
+    nlsdof fit data.csv --out fitted.toml --predict fitted.csv
+    nlsdof frf --model fitted.toml --at data.csv --csv
+  Points are listed in sweep order per level, levels in the data's order.
+
 EXAMPLES:
   nlsdof frf --model examples/har-wing.toml --gamma 0.41,0.62,0.81,1.00,1.23 \\
       --f-min 5.2 --f-max 5.6 --steps 200 --plot wing.svg
@@ -149,31 +187,40 @@ fn linspace(f_min: f64, f_max: f64, steps: usize) -> Vec<f64> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    if args.at.is_some() {
+        return run_at(&args);
+    }
     // All checks first, all computation in memory; files are written last
     // and atomically, so an error never leaves a file behind.
     plot::check_svg_name(args.plot.as_deref())?;
-    let gammas = parse_gammas(&args.gamma)?;
-    let f_min = check_frequency("--f-min", args.f_min)?;
-    let f_max = check_frequency("--f-max", args.f_max)?;
+    // clap requires these without --at
+    let (Some(gamma_list), Some(f_min), Some(f_max), Some(steps)) =
+        (&args.gamma, args.f_min, args.f_max, args.steps)
+    else {
+        return Err(CliError::Usage(
+            "give --gamma, --f-min, --f-max and --steps, or --at DATA.csv".into(),
+        ));
+    };
+    let gammas = parse_gammas(gamma_list)?;
+    let f_min = check_frequency("--f-min", f_min)?;
+    let f_max = check_frequency("--f-max", f_max)?;
     if f_min >= f_max {
         return Err(CliError::Usage(format!(
             "--f-min {f_min} must be below --f-max {f_max} (Hz)"
         )));
     }
-    if args.steps < 2 || args.steps > MAX_STEPS {
+    if steps < 2 || steps > MAX_STEPS {
         return Err(CliError::Usage(format!(
-            "--steps {} is not allowed: need an integer from 2 to {MAX_STEPS}",
-            args.steps
+            "--steps {steps} is not allowed: need an integer from 2 to {MAX_STEPS}"
         )));
     }
-    let model = load_model(&args.model)?;
+    let (model, gain) = load_steady_model(&args.model)?;
     let formulation = args.formulation.to_core();
-    let freqs = linspace(f_min, f_max, args.steps);
+    let freqs = linspace(f_min, f_max, steps);
     let omegas: Vec<f64> = freqs.iter().map(|f| 2.0 * PI * f).collect();
     if omegas.windows(2).any(|w| w[1] <= w[0]) {
         return Err(CliError::Usage(format!(
-            "--steps {} is too many for --f-min {f_min} .. --f-max {f_max} Hz: neighbouring frequencies coincide in floating point; use fewer steps or a wider range",
-            args.steps
+            "--steps {steps} is too many for --f-min {f_min} .. --f-max {f_max} Hz: neighbouring frequencies coincide in floating point; use fewer steps or a wider range"
         )));
     }
 
@@ -188,52 +235,128 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let request = super::frf_mhb::Request {
             model: &args.model,
             sweep: args.sweep.to_core(),
-            steps: args.steps,
+            steps,
             harmonics: args.harmonics,
             json: args.json,
             csv: args.csv,
             plot: args.plot.as_deref(),
+            input_gain: gain,
         };
         return super::frf_mhb::run(&request, &model, &gammas, &omegas, f_min, f_max);
     }
 
-    let levels = level_responses(&model, &gammas, &omegas, args.sweep.to_core(), formulation)?;
-
-    let model_name = args.model.display().to_string();
+    // the model sees input_gain * gamma; the reports give the levels as given
+    let model_gammas: Vec<f64> = gammas.iter().map(|g| gain * g).collect();
+    let mut levels = level_responses(
+        &model,
+        &model_gammas,
+        &omegas,
+        args.sweep.to_core(),
+        formulation,
+    )?;
+    for (l, &g) in levels.iter_mut().zip(&gammas) {
+        l.gamma = g;
+    }
     let request = report::SweepRequest {
-        model_name: &model_name,
+        model_name: &args.model.display().to_string(),
         direction: args.sweep.to_core(),
         formulation,
-        steps: args.steps,
+        steps,
         f_min,
         f_max,
+        at: None,
     };
+    let title = format!(
+        "{} - {}, sweep {}",
+        args.model
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        args.formulation.description(),
+        args.sweep.name()
+    );
+    emit(&args, &request, &model, gain, &levels, title)
+}
+
+/// `--at DATA.csv`: the sweeps of the data's levels, frequencies and
+/// directions ([`nlsdof::identification::sweeps_at_data`]).
+fn run_at(args: &Args) -> Result<(), CliError> {
+    plot::check_svg_name(args.plot.as_deref())?;
+    let at = args.at.as_ref().expect("run_at needs --at");
+    let (model, gain) = load_steady_model(&args.model)?;
+    let data = nlsdof_io::stepped_sine_data::read_csv(at, &Default::default())
+        .map_err(|e| CliError::Usage(e.to_string()))?;
+    let levels = nlsdof::identification::sweeps_at_data(&model, gain, &data)?;
+    let (mut f_min, mut f_max) = (f64::INFINITY, 0.0f64);
+    for c in &data.curves {
+        f_min = f_min.min(c.omegas[0] / (2.0 * PI));
+        f_max = f_max.max(c.omegas[c.omegas.len() - 1] / (2.0 * PI));
+    }
+    let at_name = at.display().to_string();
+    let request = report::SweepRequest {
+        model_name: &args.model.display().to_string(),
+        direction: data.curves[0].direction,
+        formulation: nlsdof::Formulation::HarmonicBalance,
+        steps: data
+            .curves
+            .iter()
+            .map(|c| c.omegas.len())
+            .max()
+            .unwrap_or(0),
+        f_min,
+        f_max,
+        at: Some(&at_name),
+    };
+    let title = format!(
+        "{} at the data of {}",
+        args.model
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        at.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    );
+    emit(args, &request, &model, gain, &levels, title)
+}
+
+/// Prints the sweeps (text, JSON or CSV) and writes the plot.
+fn emit(
+    args: &Args,
+    request: &report::SweepRequest,
+    model: &nlsdof::Model,
+    gain: f64,
+    levels: &[nlsdof::LevelResponse],
+    title: String,
+) -> Result<(), CliError> {
+    let formulation = request.formulation;
+    let (f_min, f_max) = (request.f_min, request.f_max);
     let mut stdout_text = if args.json {
-        format!("{}\n", report::sweep_json(&request, &model, &levels))
+        let mut v = report::sweep_json(request, model, levels);
+        v["input_gain"] = serde_json::json!(gain);
+        format!("{v}\n")
     } else if args.csv {
-        report::sweep_csv(&levels)
+        report::sweep_csv(levels)
     } else {
-        nlsdof_report::compact_numbers(&report::sweep_text(&request, &model, &levels))
+        let text = nlsdof_report::compact_numbers(&report::sweep_text(request, model, levels));
+        match gain_note(gain) {
+            Some(note) => {
+                let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
+                format!("{first}\n{note}\n{rest}")
+            }
+            None => text,
+        }
     };
 
     if let Some(path) = &args.plot {
-        let title = format!(
-            "{} - {}, sweep {}",
-            args.model
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            args.formulation.description(),
-            args.sweep.name()
-        );
         let input = plot::FrfPlot {
             title,
             model: model.normalised()?,
             formulation,
-            direction: args.sweep.to_core(),
+            direction: request.direction,
             f_min,
             f_max,
-            levels: &levels,
+            levels,
         };
         let svg = plot::render_frf(&input)?;
         nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;

@@ -45,6 +45,8 @@ pub struct Request<'a> {
     pub json: bool,
     pub csv: bool,
     pub plot: Option<&'a std::path::Path>,
+    /// The model file's `[signal] input_gain`: the model sees `gain * gamma`.
+    pub input_gain: f64,
 }
 
 /// Checks `--harmonics`.
@@ -67,7 +69,13 @@ pub fn run(
 ) -> Result<(), CliError> {
     let h = args.harmonics;
     check_damped(model, "--harmonics")?;
-    let levels = level_sweeps(model, gammas, omegas, args.sweep, h)?;
+    let gain = args.input_gain;
+    let model_gammas: Vec<f64> = gammas.iter().map(|g| gain * g).collect();
+    let mut levels = level_sweeps(model, &model_gammas, omegas, args.sweep, h)?;
+    // the reports give the levels as given
+    for (l, &g) in levels.iter_mut().zip(gammas) {
+        l.gamma = g;
+    }
     for (i, l) in levels.iter().enumerate() {
         if let Some(w) = &l.sweep.warning {
             eprintln!(
@@ -86,11 +94,20 @@ pub fn run(
         harmonics: h,
     };
     let mut text = if args.json {
-        format!("{}\n", report::sweep_json(&request, model, &levels))
+        let mut v = report::sweep_json(&request, model, &levels);
+        v["input_gain"] = serde_json::json!(gain);
+        format!("{v}\n")
     } else if args.csv {
         report::sweep_csv(&request, &levels)
     } else {
-        report::sweep_text(&request, model, &levels, f_min, f_max)
+        let text = report::sweep_text(&request, model, &levels, f_min, f_max);
+        match super::roots::gain_note(gain) {
+            Some(note) => {
+                let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
+                format!("{first}\n{note}\n{rest}")
+            }
+            None => text,
+        }
     };
     if let Some(path) = args.plot {
         let title = format!(

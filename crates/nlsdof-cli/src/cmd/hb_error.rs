@@ -3,7 +3,7 @@
 //! the number of harmonics H, until converged
 //! ([`nlsdof::multi_harmonic::truncation`]).
 
-use super::roots::{check_frequency, check_gamma, load_model};
+use super::roots::{check_frequency, check_gamma, load_steady_model};
 use crate::error::CliError;
 use nlsdof::multi_harmonic::truncation::truncation_study;
 use nlsdof::multi_harmonic::ContinuationOptions;
@@ -87,7 +87,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
             args.h_max
         )));
     }
-    let model = load_model(&args.model)?;
+    let (model, gain) = load_steady_model(&args.model)?;
+    if let Some(note) = super::roots::gain_note(gain) {
+        eprintln!("nlsdof: {note}");
+    }
     super::frf_mhb::check_damped(&model, "hb-error")?;
     let fn_hz = model.omega_n() / (2.0 * PI);
     let f_min = check_frequency("--f-min", args.f_min.unwrap_or(0.8 * fn_hz))?;
@@ -105,9 +108,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let n = model.normalised()?;
     let mut studies = Vec::new();
     for &g in &gammas {
+        // the model sees input_gain * gamma; the report gives gamma as given
         let st = truncation_study(
             &n,
-            g,
+            gain * g,
             2.0 * PI * f_min,
             2.0 * PI * f_max,
             &ladder,

@@ -91,15 +91,53 @@ file is left behind. `nlsdof <COMMAND> --help` explains each command.",
     )
 }
 
-/// Reads and validates a model file. The message always fits on one line.
+/// Reads and validates a model file (the model alone: for its mass, or
+/// where no level is involved). The message always fits on one line.
 pub fn load_model(path: &Path) -> Result<Model, CliError> {
-    nlsdof_io::model_file::read_model(path).map_err(|e| {
+    Ok(load_document(path)?.model)
+}
+
+/// Reads and validates a whole model file: model, `[signal]`, `[provenance]`.
+pub fn load_document(path: &Path) -> Result<nlsdof_io::model_file::ModelDocument, CliError> {
+    nlsdof_io::model_file::read_document(path).map_err(|e| {
         let msg = e.to_string();
         if msg.contains('\n') {
             CliError::Usage(msg.split_whitespace().collect::<Vec<_>>().join(" "))
         } else {
             CliError::Io(e)
         }
+    })
+}
+
+/// A model file for a steady-state command: the model and the input gain
+/// its `[signal]` table applies to the levels (1 without one). Refuses, in
+/// one line naming the key, what a harmonic balance about zero cannot apply:
+/// a non-zero `input_offset` (a static force) or a negative `input_gain`.
+pub fn load_steady_model(path: &Path) -> Result<(Model, f64), CliError> {
+    let doc = load_document(path)?;
+    let s = doc.signal_or_identity();
+    if s.input_offset != 0.0 {
+        return Err(CliError::Usage(format!(
+            "{}: [signal] input_offset = {:?} is a static force, which shifts the equilibrium of a nonlinear model; the steady-state (harmonic balance) commands cannot apply it: use `nlsdof simulate`, or delete the line to see the response without it",
+            path.display(),
+            s.input_offset
+        )));
+    }
+    if s.input_gain < 0.0 {
+        return Err(CliError::Usage(format!(
+            "{}: [signal] input_gain = {:?} < 0 inverts the input; the steady-state commands need a gain > 0 (the amplitudes are those of |input_gain|, the phases shifted by 180 deg)",
+            path.display(),
+            s.input_gain
+        )));
+    }
+    Ok((doc.model, s.input_gain))
+}
+
+/// The note a steady-state command prints when the model file's gain is
+/// not 1: the levels it reports are the user's, the model sees them scaled.
+pub fn gain_note(gain: f64) -> Option<String> {
+    (gain != 1.0).then(|| {
+        format!("model file [signal] input_gain = {gain}: the model sees input_gain * gamma; levels below are as given")
     })
 }
 
@@ -174,22 +212,25 @@ EXAMPLE:
 pub fn run(args: Args) -> Result<(), CliError> {
     let gamma = check_gamma(args.gamma)?;
     let f_hz = check_frequency("--f-hz", args.f_hz)?;
-    let model = load_model(&args.model)?;
-    let response = ForcedResponse::new(&model, gamma, args.formulation.to_core())?;
+    let (model, gain) = load_steady_model(&args.model)?;
+    let response = ForcedResponse::new(&model, gain * gamma, args.formulation.to_core())?;
     let set = response.steady_states(2.0 * PI * f_hz)?;
 
     let name = args.model.display().to_string();
     let formulation = args.formulation.to_core();
     if args.json {
-        println!(
-            "{}",
-            report::roots_json(&name, &model, f_hz, gamma, formulation, &set)
-        );
+        let mut v = report::roots_json(&name, &model, f_hz, gamma, formulation, &set);
+        v["input_gain"] = serde_json::json!(gain);
+        println!("{v}");
     } else {
-        print!(
-            "{}",
-            report::roots_text(&name, &model, f_hz, gamma, formulation, &set)
-        );
+        let text = report::roots_text(&name, &model, f_hz, gamma, formulation, &set);
+        match gain_note(gain) {
+            Some(note) => {
+                let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
+                print!("{first}\n{note}\n{rest}");
+            }
+            None => print!("{text}"),
+        }
     }
     Ok(())
 }

@@ -127,30 +127,13 @@ EXAMPLE:
   nlsdof signal chirp --amplitude 0.25 --f0 4.5 --f1 6 --duration 300 --fs 2048 --out chirp.csv
   nlsdof simulate --model examples/har-wing.toml --input chirp.csv --out response.csv";
 
-/// Loads a model file; a multi-line parse message is folded to one line.
-pub(crate) fn load_model(path: &Path) -> Result<Model, CliError> {
-    nlsdof_io::model_file::read_model(path).map_err(|e| {
-        let msg = e.to_string();
-        if msg.contains('\n') {
-            CliError::Usage(msg.split_whitespace().collect::<Vec<_>>().join(" "))
-        } else {
-            CliError::Io(e)
-        }
-    })
-}
-
-/// [`load_model`] with the optional `[signal]` table of `fit-time` models.
+/// [`super::roots::load_document`]: the model and its optional `[signal]`
+/// table (gain and offsets of `fit-time` models, gain of `fit` models).
 pub(crate) fn load_model_with_signal(
     path: &Path,
 ) -> Result<(Model, Option<nlsdof_io::model_file::SignalMap>), CliError> {
-    nlsdof_io::model_file::read_model_with_signal(path).map_err(|e| {
-        let msg = e.to_string();
-        if msg.contains('\n') {
-            CliError::Usage(msg.split_whitespace().collect::<Vec<_>>().join(" "))
-        } else {
-            CliError::Io(e)
-        }
-    })
+    let d = super::roots::load_document(path)?;
+    Ok((d.model, d.signal))
 }
 
 /// A progress bar that appears only once an operation has run for more

@@ -2,7 +2,7 @@
 //! simulation of what the paper's shaker controller did, with a settling
 //! rule that is right for light damping.
 
-use super::simulate::{load_model, Progress};
+use super::simulate::Progress;
 use crate::error::CliError;
 use nlsdof::stepped_sine::{run_sweeps, RigOptions, RigSweep};
 use nlsdof::SweepDirection;
@@ -137,8 +137,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
             "--history-decimate 0 is not allowed: give N >= 1".into(),
         ));
     }
-    let model = load_model(&a.model)?;
+    let (model, gain) = super::roots::load_steady_model(&a.model)?;
+    if let Some(note) = super::roots::gain_note(gain) {
+        eprintln!("nlsdof: {note}");
+    }
     let nm = model.normalised()?;
+    // the model sees input_gain * gamma; every output gives the levels as given
+    let model_gammas: Vec<f64> = gammas.iter().map(|g| gain * g).collect();
     let n = a.steps;
     let omegas: Vec<f64> = (0..n)
         .map(|i| {
@@ -197,11 +202,22 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let progress = Progress::new((gammas.len() * n * dirs.len()) as u64, "stepped sine");
     let t_sim = Instant::now();
     let sweeps: Vec<(usize, RigSweep)> =
-        run_sweeps(&nm, &gammas, &omegas, &dirs, &opts, &|| progress.inc(1))?
-            .into_iter()
-            .enumerate()
-            .map(|(i, sw)| (i % gammas.len(), sw))
-            .collect();
+        run_sweeps(&nm, &model_gammas, &omegas, &dirs, &opts, &|| {
+            progress.inc(1)
+        })?
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut sw)| {
+            let k = i % gammas.len();
+            sw.gamma = gammas[k];
+            if gain != 1.0 {
+                for h in &mut sw.history {
+                    h.u /= gain;
+                }
+            }
+            (k, sw)
+        })
+        .collect();
     let sim_s = t_sim.elapsed().as_secs_f64();
     progress.finish();
     let mut unsettled = 0usize;

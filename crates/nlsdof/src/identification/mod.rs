@@ -554,6 +554,54 @@ pub fn predicted_jumps(data: &Dataset, theta: &Parameters) -> Result<Vec<Option<
         .collect()
 }
 
+/// The stepped-sine sweeps of `model` at the levels, frequencies and sweep
+/// directions of `data`, exactly as a fit computes its model curves (Eq 31):
+/// the model sees `input_gain · γ` (the forcing gain of a stepped-sine fit,
+/// the `[signal] input_gain` of a model file), and each sweep starts on the
+/// stable state nearest the curve's measured first amplitude (sweep rule 1′,
+/// [`objective::model_amplitudes`]). One [`LevelResponse`] per curve, in data
+/// order; its `gamma` is the measured level γ (not `input_gain · γ`) and its
+/// points are in sweep order.
+///
+/// With `model` the physical model of a fit's θ at unit mass (as `nlsdof fit
+/// --out` writes it) and `input_gain` its gain, the amplitudes equal the
+/// fit's `model_amplitudes` bit for bit (test
+/// `sweeps_at_the_data_reproduce_the_fit_bit_for_bit`).
+pub fn sweeps_at_data(
+    model: &(impl crate::model::AsNormalised + ?Sized),
+    input_gain: f64,
+    data: &Dataset,
+) -> Result<Vec<crate::LevelResponse>, SolveError> {
+    use rayon::prelude::*;
+    if !(input_gain.is_finite() && input_gain > 0.0) {
+        return Err(crate::ParameterError::NotPositive {
+            name: "input_gain",
+            value: input_gain,
+        }
+        .into());
+    }
+    let model = model.as_normalised()?;
+    data.curves
+        .par_iter()
+        .map(|c| {
+            let response = ForcedResponse::from_normalised(
+                &model,
+                input_gain * c.gamma,
+                Formulation::HarmonicBalance,
+            )?;
+            let sweep =
+                response.sweep_from(&c.omegas, c.direction, objective::first_amplitude(c))?;
+            let phase_quadrature = response.phase_quadrature()?;
+            Ok(crate::LevelResponse {
+                gamma: c.gamma,
+                response,
+                sweep,
+                phase_quadrature,
+            })
+        })
+        .collect()
+}
+
 /// One row of the phase-quadrature table (Table 8 analogue).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PhaseQuadratureRow {

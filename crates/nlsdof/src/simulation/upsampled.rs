@@ -33,6 +33,11 @@ pub fn simulate_upsampled(
     let model = &model.as_normalised()?;
     const CHUNK: usize = 1 << 16;
     let (gain, t0, fs) = grid;
+    // checked here, before the fine grid multiplies it: the message gives
+    // the sampling rate the caller gave
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(SimulationError::NonPositiveFs { fs });
+    }
     let factor = opts.factor;
     if factor == 0 {
         return Err(SimulationError::InvalidOption {
@@ -152,6 +157,28 @@ mod record_tests {
 
     /// Each method of `simulate_record` against the linear oscillator's
     /// steady state `γ / |ω_n² − Ω² + 2iζω_nΩ|` (closed form).
+    /// A bad sampling rate is reported as given, not as the upsampled
+    /// rate of the fine grid (issue 25: "fs = -40 Hz" for fs = -10).
+    #[test]
+    fn a_bad_sampling_rate_is_named_as_given() {
+        let m = Model::linear(1.0, 100.0, 0.1).unwrap();
+        for fs in [-10.0, 0.0, f64::NAN] {
+            let e = simulate_record(
+                &m,
+                &[0.0; 8],
+                (1.0, 0.0, fs),
+                RecordMethod::Rk4Cubic,
+                State::default(),
+                &mut |_| {},
+            )
+            .unwrap_err();
+            assert!(
+                matches!(e, SimulationError::NonPositiveFs { fs: v } if v.to_bits() == fs.to_bits()),
+                "{e}"
+            );
+        }
+    }
+
     #[test]
     fn every_method_settles_on_the_linear_steady_state() {
         let m = Model::linear(1.0, 3947.84, 12.566).unwrap(); // f_n 10 Hz, ζ = 10 %

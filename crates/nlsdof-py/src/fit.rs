@@ -87,17 +87,119 @@ impl SteppedSineData {
         }
         v
     }
+    /// Weight of every point (1 unless the data gave one).
+    #[getter]
+    fn weight<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.column(|c, k| c.weights[k]))
+    }
+    /// Where the data came from (the path read), or None for columns.
+    #[getter]
+    fn source(&self) -> Option<String> {
+        self.source.clone()
+    }
+    /// Builds the data from a mapping of columns (`level`, `gamma` m/s^2,
+    /// `f_hz` Hz, `amplitude` m zero-to-peak, optional `phase_deg`, `sweep`,
+    /// `weight`), e.g. a dict, a pandas DataFrame or `to_dict()` of another.
+    #[new]
+    fn new(columns: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (inner, source) = dataset(columns)?;
+        Ok(Self { inner, source })
+    }
+    /// The columns as a dict of lists and numpy arrays (`pandas.DataFrame(d.to_dict())`);
+    /// `SteppedSineData(d.to_dict())` reads them back.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("level", self.level())?;
+        d.set_item("gamma", self.gamma(py))?;
+        d.set_item("f_hz", self.f_hz(py))?;
+        d.set_item("amplitude", self.amplitude(py))?;
+        if self.inner.curves.iter().any(|c| c.phases.is_some()) {
+            d.set_item("phase_deg", self.phase_deg(py))?;
+        }
+        d.set_item("sweep", self.sweep())?;
+        d.set_item("weight", self.weight(py))?;
+        Ok(d)
+    }
+    /// Pickling and `copy.deepcopy`: every curve exactly as held (angular
+    /// frequencies and phases in rad, no conversion).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (CurveStates, Option<String>))> {
+        let me = slf.get();
+        let curves = me
+            .inner
+            .curves
+            .iter()
+            .map(|c| {
+                (
+                    c.level.clone(),
+                    c.gamma,
+                    c.direction.name().to_string(),
+                    c.omegas.clone(),
+                    c.amplitudes.clone(),
+                    c.phases.clone(),
+                    c.weights.clone(),
+                )
+            })
+            .collect();
+        Ok((slf.get_type().getattr("_from_state")?, (curves, me.source.clone())))
+    }
+    /// Rebuilds pickled data (see `__reduce__`).
+    #[staticmethod]
+    fn _from_state(curves: CurveStates, source: Option<String>) -> PyResult<Self> {
+        let curves = curves
+            .into_iter()
+            .map(|(level, gamma, dir, omegas, amplitudes, phases, weights)| {
+                let direction = crate::convert::direction(&dir)?;
+                Ok(nlsdof::identification::Curve {
+                    level,
+                    gamma,
+                    direction,
+                    omegas,
+                    amplitudes,
+                    phases,
+                    weights,
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(Self {
+            inner: Dataset { curves },
+            source,
+        })
+    }
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<SteppedSineData>()
+            .is_ok_and(|o| o.get().inner == self.inner)
+    }
     fn __len__(&self) -> usize {
         self.inner.len()
     }
     fn __repr__(&self) -> String {
+        let levels: Vec<String> = self
+            .inner
+            .curves
+            .iter()
+            .map(|c| format!("{} ({} m/s^2, {})", c.level, c.gamma, c.direction.name()))
+            .collect();
         format!(
-            "SteppedSineData({} points, {} curves)",
+            "SteppedSineData({} points, {} curves: {})",
             self.inner.len(),
-            self.inner.curves.len()
+            self.inner.curves.len(),
+            levels.join(", ")
         )
     }
 }
+
+/// The pickled state of each curve: level, gamma, direction, omegas (rad/s),
+/// amplitudes, phases (rad), weights.
+type CurveStates = Vec<(
+    String,
+    f64,
+    String,
+    Vec<f64>,
+    Vec<f64>,
+    Option<Vec<f64>>,
+    Vec<f64>,
+)>;
 
 /// Reads the long CSV format `level,gamma,f_hz,amplitude[,phase_deg,sweep,weight]`
 /// (as `nlsdof fit DATA`). `velocity`/`acceleration`: the amplitudes are of
@@ -478,7 +580,7 @@ impl FitResult {
                 .uncertainty
                 .as_ref()
                 .filter(|_| valid)
-                .and_then(|u| u.index(PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k])));
+                .and_then(|u| u.index(nlsdof::identification::PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k])));
             let d = PyDict::new(py);
             d.set_item("value", res.theta[j])?;
             d.set_item("interval", interval)?;
@@ -599,12 +701,40 @@ impl FitResult {
     fn report(&self) -> PyResult<String> {
         nlsdof_report::fit::identification_report(&self.id, self.mass).map_err(value_error)
     }
+    /// The model, every parameter present with its unit (and 95 % interval
+    /// when valid), the cost and the verdict.
     fn __repr__(&self) -> String {
+        let fit = &self.id.fit;
+        let ci = fit.uncertainty.as_ref().filter(|_| fit.warning().is_none());
+        let params: Vec<String> = (0..nlsdof::identification::N_PARAMS)
+            .filter(|&j| fit.status[j] != Status::Absent)
+            .map(|j| {
+                let info = Parameter::ALL[j].info();
+                let v = fit.theta[j];
+                let unit = if info.unit == "-" || info.unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" {}", info.unit)
+                };
+                let interval = ci
+                    .and_then(|u| u.index(nlsdof::identification::PARAM_NAMES[j]).map(|k| (u, k)))
+                    .map(|(u, k)| format!(" [{:.4e}, {:.4e}]", u.lower[k], u.upper[k]))
+                    .unwrap_or_default();
+                let held = if fit.status[j] == Status::Free {
+                    ""
+                } else {
+                    " (held)"
+                };
+                format!("{} = {v:.6e}{unit}{interval}{held}", info.name)
+            })
+            .collect();
         format!(
-            "FitResult(model={}, cost={:.6e}, converged={})",
-            self.id.fit.kind.name(),
-            self.id.fit.cost,
-            if self.id.fit.converged {
+            "FitResult(model={}: {}; cost (Eq 31) = {:.6e}; converged={}, adequate={})",
+            fit.kind.name(),
+            params.join(", "),
+            fit.cost,
+            if fit.converged { "True" } else { "False" },
+            if self.id.adequacy.adequate {
                 "True"
             } else {
                 "False"

@@ -267,26 +267,38 @@ impl Model {
         self.inner.zeta()
     }
 
+    /// The parameters with their SI units (and the signal map when set),
+    /// e.g. `Model(mass=0.26699 kg, stiffness=306.7878 N/m, damping=0.1164
+    /// N s/m, nonlinear_stiffness=(85000.0 N/m^5.0022, rho=4.0022))`.
     fn __repr__(&self) -> String {
-        let f = |p: Option<(f64, f64)>| match p {
-            Some((c, e)) => format!("({c:?}, {e:?})"),
-            None => "None".into(),
-        };
-        let signal = match self.signal {
-            None => String::new(),
-            Some(s) => format!(
+        let m = &self.inner;
+        let mut s = format!(
+            "Model(mass={:?} kg, stiffness={:?} N/m, damping={:?} N s/m",
+            m.mass, m.stiffness, m.damping
+        );
+        if let Some(p) = m.nonlinear_stiffness {
+            s += &format!(
+                ", nonlinear_stiffness=({:?} N/m^{:?}, rho={:?})",
+                p.coefficient,
+                p.exponent + 1.0,
+                p.exponent
+            );
+        }
+        if let Some(p) = m.nonlinear_damping {
+            s += &format!(
+                ", nonlinear_damping=({:?} N (s/m)^{:?}, eta={:?})",
+                p.coefficient,
+                p.exponent + 1.0,
+                p.exponent
+            );
+        }
+        if let Some(g) = self.signal {
+            s += &format!(
                 ", signal={{'input_gain': {:?}, 'input_offset': {:?}, 'output_offset': {:?}}}",
-                s.input_gain, s.input_offset, s.output_offset
-            ),
-        };
-        format!(
-            "Model(mass={:?}, stiffness={:?}, damping={:?}, nonlinear_stiffness={}, nonlinear_damping={}{signal})",
-            self.inner.mass,
-            self.inner.stiffness,
-            self.inner.damping,
-            f(self.nonlinear_stiffness()),
-            f(self.nonlinear_damping())
-        )
+                g.input_gain, g.input_offset, g.output_offset
+            );
+        }
+        s + ")"
     }
 
     /// Every steady state at input level `gamma` (m/s^2, zero-to-peak) and

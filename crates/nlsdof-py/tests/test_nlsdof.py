@@ -98,6 +98,7 @@ def test_a_model_is_a_value_with_its_tables(tmp_path):
     assert m != nlsdof.Model(0.3, 1234.5, 0.07)
     assert nlsdof.Model(1, 2, 0.1) == nlsdof.Model(1.0, 2.0, 0.1)
     assert "signal={'input_gain': 1.77" in repr(m)
+    assert "stiffness=1234.5 N/m" in repr(m) and "eta=0.6" in repr(m)
     # the file keeps every table
     path = tmp_path / "m.toml"
     path.write_text(m.to_toml())
@@ -356,6 +357,34 @@ def test_fit_options_mean_the_same_in_python_and_on_the_cli(cli, tmp_path, kwarg
     assert nlsdof.fit(path, model="duffing-generalised", **kwargs).to_dict() == doc
 
 
+def test_data_and_results_behave_as_values(tmp_path):
+    import copy
+    import pickle
+
+    path = tmp_path / "data.csv"
+    write_data(path, wing_data())
+    d = nlsdof.read_stepped_sine(path)
+    assert d.source == str(path)
+    for e in (pickle.loads(pickle.dumps(d)), copy.deepcopy(d), nlsdof.SteppedSineData(d.to_dict())):
+        assert e == d
+        assert np.array_equal(e.f_hz, d.f_hz) and np.array_equal(e.amplitude, d.amplitude)
+    assert pickle.loads(pickle.dumps(d)).source == d.source
+    assert "1 (0.41 m/s^2, up)" in repr(d)
+    res = nlsdof.fit(d, model="duffing-quadratic", mass=0.26699)
+    r = repr(res)
+    assert r.startswith("FitResult(model=duffing-quadratic: alpha = ") and "1/s^2" in r
+    assert "converged=True" in r
+    # the model of a fit is a value like any other
+    assert pickle.loads(pickle.dumps(res.model)) == res.model
+
+
+def test_type_errors_name_the_argument():
+    with pytest.raises(TypeError, match="mass"):
+        nlsdof.Model(mass="0.3", stiffness=1.0, damping=0.1)
+    with pytest.raises(TypeError, match="damping"):
+        nlsdof.Model(1.0, 2.0, "x")
+
+
 def test_profile_equals_cli(cli, tmp_path):
     cols = wing_data()
     path = tmp_path / "data.csv"
@@ -609,6 +638,26 @@ def test_fit_time_equals_cli(cli, tmp_path):
     p = res["parameters"]
     assert p["alpha"] == pytest.approx(3947.84, rel=1e-6)
     assert p["rho"] == 2.0
+    # the same defaults: the whole record, the Duffing model
+    whole = json.loads(run_cli(cli, "fit-time", "--input", path, "--input-column", "u", "--output-column",
+                               "y", "--fs", fs, "--json"))
+    mine = nlsdof.fit_time(u, x, fs=fs)
+    for k in ("fit_s", "total_s", "input"):
+        whole.pop(k), mine.pop(k)
+    assert mine == whole
+    assert mine["estimation"]["range"] == [0, n] and mine["model"] == "duffing"
+    # the model file of fit-time, read by Python, simulates the test range to y_model
+    out, pred = tmp_path / "m.toml", tmp_path / "p.csv"
+    run_cli(cli, "fit-time", "--input", path, "--input-column", "u", "--output-column", "y", "--fs", fs,
+            "--range", "0:4000", "--test", "4000:6000", "--out", out, "--predict", pred)
+    m = nlsdof.Model.from_toml(out)
+    assert m.signal is not None and m.provenance["tool"] == "nlsdof fit-time"
+    assert m.provenance["range"] == "0:4000"
+    y_model = np.array([float(r["y_model"]) for r in csv.DictReader(open(pred))])
+    init = doc["tests"][0]["initial"]
+    xs, _ = m.simulate(u[4000:6000], fs, x0=init["x0"], v0=init["v0"])
+    y = xs + m.signal["output_offset"]
+    assert np.max(np.abs(y - y_model)) < 1e-9 * np.max(np.abs(y_model))
 
 
 # ------------------------------------------------------------ examples

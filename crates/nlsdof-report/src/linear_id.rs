@@ -259,6 +259,13 @@ pub fn model_file_text(id: &SdofIdentification, source_file: &str) -> Result<Str
         }
     };
     s += &nlsdof_io::model_file::model_to_toml(&model);
+    s += &nlsdof_io::model_file::provenance_to_toml(&nlsdof_io::model_file::Provenance {
+        tool: Some("nlsdof linear-id".into()),
+        version: Some(env!("CARGO_PKG_VERSION").into()),
+        data: Some(source_file.to_string()),
+        model: Some("linear".into()),
+        ..Default::default()
+    });
     Ok(s)
 }
 

@@ -22,7 +22,7 @@ pub enum ParameterError {
     NotOddExponent { value: i64 },
     #[error("frequency range [{min}, {max}] is invalid: need 0 < min < max, both finite")]
     InvalidRange { min: f64, max: f64 },
-    #[error("frequencies must be strictly increasing: element {index} ({value} rad/s) does not exceed the previous one ({previous} rad/s)")]
+    #[error("frequencies must be strictly increasing: element {index} ({value_hz} Hz, {value} rad/s) does not exceed the previous one ({previous_hz} Hz, {previous} rad/s)", value_hz = .value / std::f64::consts::TAU, previous_hz = .previous / std::f64::consts::TAU)]
     NotIncreasing {
         index: usize,
         value: f64,
@@ -37,7 +37,7 @@ pub enum ParameterError {
 pub enum SolveError {
     #[error(transparent)]
     Parameter(#[from] ParameterError),
-    #[error("harmonic-balance equation could not be evaluated (overflow) at amplitude {amplitude} m, frequency {omega} rad/s: parameters out of representable range")]
+    #[error("harmonic-balance equation could not be evaluated (overflow) at amplitude {amplitude} m, frequency {omega_hz} Hz ({omega} rad/s): parameters out of representable range", omega_hz = .omega / std::f64::consts::TAU)]
     Overflow { amplitude: f64, omega: f64 },
     #[error("{what} did not converge after {iterations} iterations (last residual {residual:e})")]
     NoConvergence {

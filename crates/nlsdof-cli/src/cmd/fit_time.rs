@@ -36,11 +36,13 @@ pub struct Args {
     /// Time column (s); must be uniformly sampled. Instead of --fs.
     #[arg(long, value_name = "C")]
     pub time_column: Option<String>,
-    /// Estimation range A:B, 0-based half-open sample indices.
+    /// Estimation range A:B, 0-based half-open sample indices (default: the whole record,
+    /// as Python's fit_time(fit_range=None)).
     #[arg(long, value_name = "A:B")]
-    pub range: String,
-    /// Model: linear, duffing, generalised, quadratic, duffing-quadratic, duffing-generalised, generalised-damping, generalised-stiffness.
-    #[arg(long, value_name = "KIND")]
+    pub range: Option<String>,
+    /// Model: linear, duffing (default, as Python's fit_time), generalised, quadratic,
+    /// duffing-quadratic, duffing-generalised, generalised-damping, generalised-stiffness.
+    #[arg(long, value_name = "KIND", default_value = "duffing")]
     pub model: String,
     /// Test range A:B (0-based half-open; may be repeated): predicted from its input and its first 50 output samples.
     #[arg(long, value_name = "A:B")]
@@ -128,7 +130,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if a.starts == 0 {
         return Err(CliError::Usage("--starts 0: give at least 1".into()));
     }
-    let range = parse_range("--range", &a.range)?;
+    let range_arg = a.range.as_deref().map(|r| parse_range("--range", r)).transpose()?;
     let tests: Vec<SampleRange> = a
         .test
         .iter()
@@ -187,6 +189,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
     };
     let rec = TimeRecord::new(u, y, fs)?;
+    let range = range_arg.unwrap_or(SampleRange::new(0, u.len()));
     if tests.is_empty() {
         check_ranges(u.len(), range, None)?;
     }

@@ -72,19 +72,19 @@ pub enum MhbError {
         estimate: f64,
         tolerance: f64,
     },
-    #[error("Newton did not converge at {omega} rad/s after {iterations} iterations (residual/gamma {residual:e})")]
+    #[error("Newton did not converge at {omega_hz} Hz ({omega} rad/s) after {iterations} iterations (residual/gamma {residual:e})", omega_hz = .omega / std::f64::consts::TAU)]
     NoConvergence {
         omega: f64,
         iterations: usize,
         residual: f64,
     },
-    #[error("harmonic-balance Jacobian is singular at {omega} rad/s, gamma = {gamma}")]
+    #[error("harmonic-balance Jacobian is singular at {omega_hz} Hz ({omega} rad/s), gamma = {gamma}", omega_hz = .omega / std::f64::consts::TAU)]
     Singular { omega: f64, gamma: f64 },
-    #[error("non-finite value in the harmonic-balance equations at {omega} rad/s (overflow)")]
+    #[error("non-finite value in the harmonic-balance equations at {omega_hz} Hz ({omega} rad/s) (overflow)", omega_hz = .omega / std::f64::consts::TAU)]
     NotFinite { omega: f64 },
-    #[error("no first-order steady state to start from at {omega} rad/s (e.g. Coulomb sticking)")]
+    #[error("no first-order steady state to start from at {omega_hz} Hz ({omega} rad/s) (e.g. Coulomb sticking)", omega_hz = .omega / std::f64::consts::TAU)]
     NoStart { omega: f64 },
-    #[error("the Hill eigenvalue problem failed to converge at {omega} rad/s")]
+    #[error("the Hill eigenvalue problem failed to converge at {omega_hz} Hz ({omega} rad/s)", omega_hz = .omega / std::f64::consts::TAU)]
     Eigenvalues { omega: f64 },
 }
 

@@ -67,13 +67,13 @@ pub enum VectorFitError {
         index: usize,
         value: String,
     },
-    #[error("frequencies must be strictly increasing: element {index} ({value} rad/s) does not exceed the previous one ({previous} rad/s)")]
+    #[error("frequencies must be strictly increasing: element {index} ({value_hz} Hz, {value} rad/s) does not exceed the previous one ({previous_hz} Hz, {previous} rad/s)", value_hz = .value / std::f64::consts::TAU, previous_hz = .previous / std::f64::consts::TAU)]
     NotIncreasing {
         index: usize,
         value: f64,
         previous: f64,
     },
-    #[error("frequency[{index}] = {value} rad/s is negative")]
+    #[error("frequency[{index}] = {value_hz} Hz ({value} rad/s) is negative", value_hz = .value / std::f64::consts::TAU)]
     NegativeFrequency { index: usize, value: f64 },
     #[error("weight[{index}] = {value} must be finite and > 0")]
     BadWeight { index: usize, value: f64 },

@@ -66,3 +66,16 @@ pub fn formulation(s: &str) -> PyResult<nlsdof::Formulation> {
         ))),
     }
 }
+
+/// A pair `(a, b)` from any sequence of two values (tuple, list, numpy
+/// array), naming the argument when it has another length.
+pub fn pair<T: Copy>(v: Option<Vec<T>>, name: &str) -> PyResult<Option<(T, T)>> {
+    match v {
+        None => Ok(None),
+        Some(v) if v.len() == 2 => Ok(Some((v[0], v[1]))),
+        Some(v) => Err(value_error(format!(
+            "{name} must be a pair of two values, got {}",
+            v.len()
+        ))),
+    }
+}

@@ -122,7 +122,9 @@ impl SteppedSineData {
     }
     /// Pickling and `copy.deepcopy`: every curve exactly as held (angular
     /// frequencies and phases in rad, no conversion).
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (CurveStates, Option<String>))> {
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (CurveStates, Option<String>))> {
         let me = slf.get();
         let curves = me
             .inner
@@ -140,7 +142,10 @@ impl SteppedSineData {
                 )
             })
             .collect();
-        Ok((slf.get_type().getattr("_from_state")?, (curves, me.source.clone())))
+        Ok((
+            slf.get_type().getattr("_from_state")?,
+            (curves, me.source.clone()),
+        ))
     }
     /// Rebuilds pickled data (see `__reduce__`).
     #[staticmethod]
@@ -388,13 +393,13 @@ pub fn fit(
     mass: Option<f64>,
     fix: Option<HashMap<String, f64>>,
     free: Option<Vec<String>>,
-    bounds: Option<HashMap<String, (f64, f64)>>,
+    bounds: Option<HashMap<String, Vec<f64>>>,
     sign: &str,
     phase: Option<&Bound<'_, PyAny>>,
     phase_weight: Option<f64>,
     weighting: &str,
     jump_weight: Option<f64>,
-    grid: Option<(usize, usize)>,
+    grid: Option<Vec<usize>>,
     refine: Option<usize>,
     starts: usize,
     seed: u64,
@@ -431,7 +436,15 @@ pub fn fit(
             n => plan.free.push(n.to_string()),
         }
     }
-    let mut bounds: Vec<(String, (f64, f64))> = bounds.unwrap_or_default().into_iter().collect();
+    let mut bounds: Vec<(String, (f64, f64))> = bounds
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(k, v)| {
+            let b = crate::convert::pair(Some(v), &format!("bounds[{k:?}]"))?
+                .expect("a pair was given");
+            Ok((k, b))
+        })
+        .collect::<PyResult<_>>()?;
     bounds.sort_by(|a, b| a.0.cmp(&b.0));
     plan.bounds = bounds
         .into_iter()
@@ -472,7 +485,7 @@ pub fn fit(
         Some(0.0) => JumpChoice::Off,
         Some(l) => JumpChoice::Weight(l),
     };
-    if let Some((a, b)) = grid {
+    if let Some((a, b)) = crate::convert::pair(grid, "grid")? {
         plan = plan.with_grid(a, b).map_err(value_error)?;
     }
     if let Some(r) = refine {
@@ -576,11 +589,10 @@ impl FitResult {
                 continue;
             }
             let info = p.info();
-            let interval = res
-                .uncertainty
-                .as_ref()
-                .filter(|_| valid)
-                .and_then(|u| u.index(nlsdof::identification::PARAM_NAMES[j]).map(|k| (u.lower[k], u.upper[k])));
+            let interval = res.uncertainty.as_ref().filter(|_| valid).and_then(|u| {
+                u.index(nlsdof::identification::PARAM_NAMES[j])
+                    .map(|k| (u.lower[k], u.upper[k]))
+            });
             let d = PyDict::new(py);
             d.set_item("value", res.theta[j])?;
             d.set_item("interval", interval)?;
@@ -717,7 +729,10 @@ impl FitResult {
                     format!(" {}", info.unit)
                 };
                 let interval = ci
-                    .and_then(|u| u.index(nlsdof::identification::PARAM_NAMES[j]).map(|k| (u, k)))
+                    .and_then(|u| {
+                        u.index(nlsdof::identification::PARAM_NAMES[j])
+                            .map(|k| (u, k))
+                    })
                     .map(|(u, k)| format!(" [{:.4e}, {:.4e}]", u.lower[k], u.upper[k]))
                     .unwrap_or_default();
                 let held = if fit.status[j] == Status::Free {

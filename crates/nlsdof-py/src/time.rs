@@ -26,7 +26,7 @@ pub fn decay<'py>(
     x: &Bound<'py, PyAny>,
     fs: f64,
     t_start: Option<f64>,
-    band: Option<(f64, f64)>,
+    band: Option<Vec<f64>>,
     bins: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     if bins < 4 {
@@ -35,6 +35,7 @@ pub fn decay<'py>(
     let t0 = Instant::now();
     let a = f64_array(x, "x")?;
     let x = values(&a);
+    let band = crate::convert::pair(band, "band")?;
     let opts = DecayOptions {
         t_start,
         band,
@@ -68,8 +69,8 @@ pub fn fit_time<'py>(
     y: &Bound<'py, PyAny>,
     fs: f64,
     model: &str,
-    fit_range: Option<(usize, usize)>,
-    tests: Option<Vec<(usize, usize)>>,
+    fit_range: Option<Vec<usize>>,
+    tests: Option<Vec<Vec<usize>>>,
     starts: usize,
     seed: u64,
     max_iterations: usize,
@@ -88,15 +89,20 @@ pub fn fit_time<'py>(
     let (ua, ya) = (f64_array(u, "u")?, f64_array(y, "y")?);
     let (u, y) = (values(&ua), values(&ya));
     let rec = TimeRecord::new(&u, &y, fs).map_err(value_error)?;
-    let range = match fit_range {
+    let range = match crate::convert::pair(fit_range, "fit_range")? {
         Some((a, b)) => SampleRange::new(a, b),
         None => SampleRange::new(0, u.len()),
     };
     let tests: Vec<SampleRange> = tests
         .unwrap_or_default()
         .into_iter()
-        .map(|(a, b)| SampleRange::new(a, b))
-        .collect();
+        .enumerate()
+        .map(|(i, t)| {
+            let (a, b) =
+                crate::convert::pair(Some(t), &format!("tests[{i}]"))?.expect("a pair was given");
+            Ok(SampleRange::new(a, b))
+        })
+        .collect::<PyResult<_>>()?;
     if tests.is_empty() {
         check_ranges(u.len(), range, None).map_err(value_error)?;
     }

@@ -378,6 +378,17 @@ def test_data_and_results_behave_as_values(tmp_path):
     assert pickle.loads(pickle.dumps(res.model)) == res.model
 
 
+def test_sequences_are_accepted_wherever_a_pair_is():
+    path_cols = wing_data()
+    a = nlsdof.fit(path_cols, model="duffing-generalised", grid=[9, 7], bounds={"rho": [1.0, 3.0]})
+    b = nlsdof.fit(path_cols, model="duffing-generalised", grid=(9, 7), bounds={"rho": (1.0, 3.0)})
+    assert a.to_dict() == b.to_dict()
+    with pytest.raises(ValueError, match="grid"):
+        nlsdof.fit(path_cols, grid=[9, 7, 5])
+    with pytest.raises(ValueError, match="rho"):
+        nlsdof.fit(path_cols, bounds={"rho": [1.0]})
+
+
 def test_type_errors_name_the_argument():
     with pytest.raises(TypeError, match="mass"):
         nlsdof.Model(mass="0.3", stiffness=1.0, damping=0.1)
@@ -556,6 +567,19 @@ def test_rig_settles_on_the_steady_state_of_a_linear_model():
     assert rig.integration_error < 1e-3
 
 
+def test_rig_equals_the_cli_rig(cli, tmp_path):
+    # the same defaults (samples per cycle, tolerance, cycles) and the same grid
+    out = tmp_path / "rig.csv"
+    run_cli(cli, "stepped-sine", "--model", DUFFING, "--gamma", "1.5", "--f-min", "9", "--f-max", "12",
+            "--steps", "7", "--sweep", "down", "--out", out)
+    with open(out) as fh:
+        rows = list(csv.DictReader(fh))
+    f = [9.0 + (12.0 - 9.0) * i / 6 for i in range(7)]
+    rig = nlsdof.Model.from_toml(DUFFING).stepped_sine(1.5, f[::-1], direction="down")
+    assert [float(r["f_hz"]) for r in rows] == list(rig.f_hz)
+    np.testing.assert_allclose([float(r["amplitude"]) for r in rows], rig.amplitude, rtol=1e-12)
+
+
 def test_linear_id_recovers_a_linear_sdof():
     wn2, d = 3947.84, 1.2566  # alpha = k/m, delta = c/m
     f = np.linspace(8.0, 12.0, 401)
@@ -613,6 +637,56 @@ def test_decay_of_a_linear_oscillator_reads_its_frequency_and_decay_rate():
     delta = doc["damping_fit"]["parameters"][0]
     assert delta["name"] == "delta"
     assert delta["value"] == pytest.approx(2 * zeta * wn, rel=0.01)
+
+
+def drop_run_keys(doc):
+    # what differs between two runs by construction: timings and the input's name
+    for k in ("input", "fit_s", "total_s", "wall_s", "elapsed_s", "analyse_s", "read_s"):
+        doc.pop(k, None)
+    return doc
+
+
+def test_decay_linear_id_and_spectrogram_equal_their_cli_verbs(cli, tmp_path):
+    # decay: the same record, the same defaults
+    fs, fn, zeta = 2000.0, 40.0, 0.01
+    wn = 2 * np.pi * fn
+    t = np.arange(int(6.0 * fs)) / fs
+    x = 1e-3 * np.exp(-zeta * wn * t) * np.cos(wn * np.sqrt(1 - zeta**2) * t) * (1 + 0.2 * np.exp(-t))
+    rec = tmp_path / "decay.csv"
+    with open(rec, "w") as out:
+        out.write("x\n")
+        for v in x:
+            out.write(f"{float(v)!r}\n")
+    doc = json.loads(run_cli(cli, "decay", "--input", rec, "--column", "x", "--fs", fs, "--json"))
+    assert drop_run_keys(nlsdof.decay(x, fs=fs)) == drop_run_keys(doc)
+    # linear-id: an FRF table, the same defaults (poles auto)
+    f = np.linspace(8.0, 12.0, 301)
+    w = 2 * np.pi * f
+    h = 1.0 / (3947.84 - w**2 + 1j * 1.2566 * w) + 1e-6
+    frf = tmp_path / "frf.csv"
+    with open(frf, "w") as out:
+        out.write("f_hz,re,im\n")
+        for a, b in zip(f, h):
+            out.write(f"{float(a)!r},{float(b.real)!r},{float(b.imag)!r}\n")
+    doc = json.loads(run_cli(cli, "linear-id", frf, "--input", "acceleration", "--output", "displacement",
+                             "--json"))
+    mine = nlsdof.linear_id(f, h, input="acceleration", output="displacement")
+    assert drop_run_keys(mine) == drop_run_keys(doc)
+    # spectrogram comparison (Eq 33): the same two signals, the same defaults
+    n = 6000
+    a = np.sin(2 * np.pi * 50 * np.arange(n) / 1000.0)
+    b = 1.05 * a + 0.01 * np.sin(2 * np.pi * 120 * np.arange(n) / 1000.0)
+    for name, sig in (("a.csv", a), ("b.csv", b)):
+        with open(tmp_path / name, "w") as out:
+            out.write("x\n")
+            for v in sig:
+                out.write(f"{float(v)!r}\n")
+    doc = json.loads(run_cli(cli, "spectrogram", "--input", tmp_path / "a.csv", "--column", "x", "--fs", 1000,
+                             "--compare", tmp_path / "b.csv", "--json"))
+    mine = nlsdof.compare_spectrograms(a, b, fs=1000.0)
+    for k in ("column", "file"):  # the CLI names the file and column it read
+        mine.pop(k), doc["compare"].pop(k)
+    assert mine == doc["compare"]
 
 
 def test_fit_time_equals_cli(cli, tmp_path):

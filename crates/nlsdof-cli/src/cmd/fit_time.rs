@@ -130,7 +130,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if a.starts == 0 {
         return Err(CliError::Usage("--starts 0: give at least 1".into()));
     }
-    let range_arg = a.range.as_deref().map(|r| parse_range("--range", r)).transpose()?;
+    let range_arg = a
+        .range
+        .as_deref()
+        .map(|r| parse_range("--range", r))
+        .transpose()?;
     let tests: Vec<SampleRange> = a
         .test
         .iter()

@@ -178,6 +178,34 @@ fn classify(target: &Path) -> Result<Target, IoError> {
             ))
         }
         Err(_) => {
+            // A symbolic link that does not resolve: follow it by hand. A
+            // loop is refused (renaming onto the link would replace it with
+            // a regular file); a dangling link is written through, creating
+            // its target, as a shell redirection does.
+            if std::fs::symlink_metadata(target).is_ok_and(|m| m.file_type().is_symlink()) {
+                let mut p = target.to_path_buf();
+                for _ in 0..40 {
+                    match std::fs::symlink_metadata(&p) {
+                        Ok(m) if m.file_type().is_symlink() => {
+                            let next = std::fs::read_link(&p).map_err(|e| {
+                                write_error(target, e.kind(), format!("cannot read the link: {e}"))
+                            })?;
+                            p = match (next.is_absolute(), p.parent()) {
+                                (false, Some(dir)) => dir.join(next),
+                                _ => next,
+                            };
+                        }
+                        Ok(_) => return classify(&p),
+                        Err(_) => return classify(&p),
+                    }
+                }
+                return Err(write_error(
+                    target,
+                    K::InvalidInput,
+                    "is a symbolic link loop (it never reaches a file); give another output path"
+                        .into(),
+                ));
+            }
             if target.to_string_lossy().ends_with('/') {
                 return Err(write_error(
                     target,
@@ -422,6 +450,27 @@ pub fn write_atomic(target: &Path, bytes: &[u8]) -> Result<(), IoError> {
 mod tests {
     use super::*;
 
+    /// Issue 30: an output path that is a symbolic link loop was replaced by
+    /// a regular file. It is refused, and nothing is written; a dangling link
+    /// is written through (its target created, the link kept).
+    #[cfg(unix)]
+    #[test]
+    fn symlink_loops_are_refused_and_dangling_links_written_through() {
+        let dir = tempfile::tempdir().unwrap();
+        let (l1, l2) = (dir.path().join("l1"), dir.path().join("l2"));
+        std::os::unix::fs::symlink(&l2, &l1).unwrap();
+        std::os::unix::fs::symlink(&l1, &l2).unwrap();
+        let e = write_atomic(&l1, b"x").unwrap_err();
+        assert!(e.to_string().contains("symbolic link loop"), "{e}");
+        assert!(check_targets(&[("--out", &l1)]).is_err());
+        assert!(std::fs::symlink_metadata(&l1).unwrap().file_type().is_symlink());
+        let dangling = dir.path().join("d");
+        std::os::unix::fs::symlink("target.csv", &dangling).unwrap();
+        write_atomic(&dangling, b"data").unwrap();
+        assert!(std::fs::symlink_metadata(&dangling).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(dir.path().join("target.csv")).unwrap(), b"data");
+    }
+
     #[test]
     fn uncommitted_leaves_nothing() {
         let dir = tempfile::tempdir().unwrap();
@@ -443,6 +492,23 @@ fn folder_error(out: &Path, message: impl std::fmt::Display) -> IoError {
         path: out.to_path_buf(),
         message: message.to_string(),
     }
+}
+
+/// Where an output folder named `out` really goes: `out` itself, or, when
+/// `out` is a symbolic link, the folder it points to (so that the link is
+/// kept and the folder behind it replaced, as writing through a link to a
+/// file does). A link that does not resolve (a loop, or a missing target)
+/// is refused before any work.
+pub fn resolve_out_dir(out: &Path) -> Result<PathBuf, IoError> {
+    if std::fs::symlink_metadata(out).is_ok_and(|m| m.file_type().is_symlink()) {
+        return std::fs::canonicalize(out).map_err(|e| {
+            folder_error(
+                out,
+                format!("is a symbolic link that does not resolve ({e}); give another folder"),
+            )
+        });
+    }
+    Ok(out.to_path_buf())
 }
 
 /// Whether `out` may become an output folder: absent, or an empty

@@ -118,9 +118,11 @@ impl Model {
         (self.stiffness / self.mass).sqrt()
     }
 
-    /// Linear damping ratio ζ = c / (2 m ω_n) = c / (2√(k m)).
+    /// Linear damping ratio ζ = c / (2 m ω_n) = c / (2√k √m): the square
+    /// roots taken apart, so that `k m` cannot overflow or underflow at
+    /// extreme (but valid) scalings (test `zeta_survives_extreme_scalings`).
     pub fn zeta(&self) -> f64 {
-        self.damping / (2.0 * (self.stiffness * self.mass).sqrt())
+        self.damping / (2.0 * self.stiffness.sqrt() * self.mass.sqrt())
     }
 
     /// Mass-normalised parameters (α, δ, β, ρ, κ, η). Validates first.
@@ -249,6 +251,18 @@ impl NormalisedModel {
 
 #[cfg(test)]
 mod tests {
+
+    /// Issue 30: mass 1e-300 gave zeta = inf and 1e300 zeta = 0 (k m out of
+    /// range); the ratio is scale-free, so every scaling gives 1 %.
+    #[test]
+    fn zeta_survives_extreme_scalings() {
+        for m in [1e-300, 1e-150, 1.0, 1e150, 1e300] {
+            let model = Model::linear(m, m * 3947.84, m * 1.256_637).unwrap();
+            let z = model.zeta();
+            assert!((z - 0.01).abs() < 1e-6, "mass {m:e}: zeta {z:e}");
+        }
+    }
+
     use super::*;
 
     #[test]

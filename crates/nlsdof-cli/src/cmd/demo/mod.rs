@@ -22,6 +22,7 @@
 
 mod progress;
 
+use std::io::Write as _;
 use crate::error::CliError;
 use nlsdof::demo::{Demo, DemoSettings};
 use nlsdof_io::atomic::{check_out_dir, StagedDir};
@@ -109,7 +110,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
             args.integer_radius
         )));
     }
-    check_out_dir(&args.out, args.force)?;
+    // a link to a folder is kept (the folder behind it is replaced); a link
+    // that does not resolve is refused here, before any work
+    let out = nlsdof_io::atomic::resolve_out_dir(&args.out)?;
+    check_out_dir(&out, args.force)?;
     let settings = DemoSettings::new(
         args.seed,
         args.quick,
@@ -117,9 +121,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.noise,
         args.integer_radius,
     );
-    let staging = StagedDir::create(&args.out)?;
+    let staging = StagedDir::create(&out)?;
     let mut demo = Demo::new(settings);
-    demo.run_all(&progress::Bars::default())?;
+    let bars = progress::Bars::default();
+    demo.run_all(&bars)?;
     let t_report = Instant::now();
     let pb = progress::stage_bar(report::WRITE_STEPS, "6/6 report");
     pb.set_message("figures (SVG, PNG) and tables");
@@ -133,19 +138,31 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // the timings are the only part that differs between runs with one seed:
     // they go into their own file and the summary's "timings_s"
     let summary = report::finish(&demo, staging.path(), summary, total)?;
-    staging.commit(&args.out, args.force)?;
+    // Standard output first, then the folder: if stdout fails (a full disk,
+    // a closed pipe) the staged folder is removed and nothing is left.
+    let text = if args.json {
+        format!(
+            "{}\n",
+            serde_json::to_string_pretty(&summary).expect("json serialises")
+        )
+    } else {
+        report::text_summary(&demo, &args.out)
+    };
+    {
+        let mut so = std::io::stdout().lock();
+        if let Err(e) = so.write_all(text.as_bytes()).and_then(|()| so.flush()) {
+            // the one policy of every verb (exit 141 on a closed pipe, else
+            // one line and exit 2); its cleanup removes the staged folder
+            drop(staging);
+            crate::stdout_failed(&e);
+        }
+    }
+    staging.commit(&out, args.force)?;
+    bars.print_stages();
     eprintln!(
         "nlsdof demo: report written to {} in {:.1} s",
         args.out.join("report.md").display(),
         total
     );
-    if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&summary).expect("json serialises")
-        );
-    } else {
-        print!("{}", report::text_summary(&demo, &args.out));
-    }
     Ok(())
 }

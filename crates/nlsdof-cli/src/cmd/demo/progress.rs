@@ -20,9 +20,19 @@ pub fn stage_bar(len: u64, stage: &str) -> ProgressBar {
 #[derive(Default)]
 pub struct Bars {
     bar: Mutex<Option<ProgressBar>>,
+    /// The stage timing lines, printed by [`Bars::print_stages`] once the
+    /// report is written: a failing run prints only its one error line.
+    stages: Mutex<Vec<String>>,
 }
 
 impl Bars {
+    /// Prints the stage timings (stderr), after success.
+    pub fn print_stages(&self) {
+        for line in self.stages.lock().expect("no panic while locked").iter() {
+            eprintln!("{line}");
+        }
+    }
+
     fn with(&self, f: impl FnOnce(&ProgressBar)) {
         if let Some(pb) = self.bar.lock().expect("no panic while locked").as_ref() {
             f(pb);
@@ -42,6 +52,10 @@ impl DemoProgress for Bars {
     }
     fn done(&self, name: &str, seconds: f64) {
         self.with(|pb| pb.finish_and_clear());
-        eprintln!("nlsdof demo: {name:<22} {seconds:>6.2} s");
+        self.stages
+            .lock()
+            .expect("no panic while locked")
+            .push(format!("nlsdof demo: {name:<22} {seconds:>6.2} s"));
     }
+
 }

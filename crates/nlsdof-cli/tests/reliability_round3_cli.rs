@@ -1,0 +1,153 @@
+//! Issue 30 (reliability, third round): each reproduction of the issue as a
+//! test, by class. docs/reliability.md ("Third round") lists them.
+
+mod common;
+use common::{example, fails_one_line, ok, write};
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A free decay of a linear oscillator (f = 20 Hz, ζ = 1 %), t,x at 1 kHz.
+fn decay_record(dir: &Path) -> PathBuf {
+    let mut text = String::from("t,x\n");
+    for k in 0..8000 {
+        let t = k as f64 / 1000.0;
+        let w = std::f64::consts::TAU * 20.0;
+        writeln!(text, "{t},{:e}", 1e-3 * (-0.01 * w * t).exp() * (w * t).cos()).unwrap();
+    }
+    write(dir, "decay.csv", &text)
+}
+
+/// Inputs every verb of the loop test needs: a sine, its response, an FRF,
+/// stepped-sine data, a free decay.
+struct Inputs {
+    sine: PathBuf,
+    response: PathBuf,
+    frf: PathBuf,
+    data: PathBuf,
+    decay: PathBuf,
+}
+
+fn inputs(dir: &Path) -> Inputs {
+    let model = example("duffing-strong.toml");
+    let sine = dir.join("sine.csv");
+    ok(&["signal", "chirp", "--amplitude", "1", "--f0", "5", "--f1", "20", "--duration", "20", "--fs", "200", "--out", s(&sine)]);
+    let response = dir.join("response.csv");
+    ok(&["simulate", "--model", s(&model), "--input", s(&sine), "--out", s(&response)]);
+    let frf = dir.join("frf.csv");
+    ok(&["frf-estimate", "--input", s(&response), "--input-channel", "accel", "--output-channel", "x", "--segment", "512", "--out", s(&frf)]);
+    let data = dir.join("data.csv");
+    let csv = ok(&["frf", "--model", s(&model), "--gamma", "0.5,1", "--f-min", "8", "--f-max", "14", "--steps", "30", "--csv"]);
+    std::fs::write(&data, csv).unwrap();
+    Inputs {
+        sine,
+        response,
+        frf,
+        data,
+        decay: decay_record(dir),
+    }
+}
+
+/// Class 2: an output path that is a symbolic link loop is refused by every
+/// verb, in one line, and the links stay links (it was replaced by a regular
+/// file, exit 0, in ten verbs).
+#[cfg(unix)]
+#[test]
+fn a_symlink_loop_as_output_is_refused_by_every_verb() {
+    let dir = tempfile::tempdir().unwrap();
+    let i = inputs(dir.path());
+    let model = example("duffing-strong.toml");
+    let (l1, l2) = (dir.path().join("l1.svg"), dir.path().join("l2.svg"));
+    std::os::unix::fs::symlink(&l2, &l1).unwrap();
+    std::os::unix::fs::symlink(&l1, &l2).unwrap();
+    let l = s(&l1);
+    let runs: Vec<Vec<&str>> = vec![
+        vec!["signal", "sine", "--amplitude", "1", "--freq", "10", "--fs", "100", "--duration", "1", "--out", l],
+        vec!["frf", "--model", s(&model), "--gamma", "1", "--f-min", "8", "--f-max", "12", "--steps", "5", "--plot", l],
+        vec!["simulate", "--model", s(&model), "--input", s(&i.sine), "--out", l],
+        vec!["stepped-sine", "--model", s(&model), "--gamma", "1", "--f-min", "9", "--f-max", "10", "--steps", "2", "--out", l],
+        vec!["fit", s(&i.data), "--model", "duffing", "--out", l],
+        vec!["fit-time", "--input", s(&i.response), "--input-column", "accel", "--output-column", "x", "--out", l],
+        vec!["decay", "--input", s(&i.decay), "--column", "x", "--plot", l],
+        vec!["linear-id", s(&i.frf), "--input", "acceleration", "--output", "displacement", "--out", l],
+        vec!["frf-estimate", "--input", s(&i.response), "--input-channel", "accel", "--output-channel", "x", "--segment", "512", "--out", l],
+        vec!["spectrogram", "--input", s(&i.sine), "--column", "accel", "--csv", l],
+    ];
+    for args in &runs {
+        let err = fails_one_line(args);
+        assert!(err.contains("symbolic link loop"), "{args:?}: {err}");
+        for link in [&l1, &l2] {
+            assert!(
+                std::fs::symlink_metadata(link).unwrap().file_type().is_symlink(),
+                "{args:?} replaced {}",
+                link.display()
+            );
+        }
+    }
+}
+
+/// Class 3: `demo` that fails on standard output leaves no folder; `--out`
+/// a loop is refused before any work; `--out` a link to a folder keeps the
+/// link and fills the folder.
+#[cfg(target_os = "linux")]
+#[test]
+fn demo_leaves_nothing_when_it_fails_and_keeps_a_linked_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
+        .args(["demo", "--quick", "--json", "--out", s(&out)])
+        .stdout(full)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "one line, no progress lines: {err}");
+    assert!(!out.exists(), "the demo folder was left behind");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing left");
+    // a loop: refused at once
+    let (l1, l2) = (dir.path().join("l1"), dir.path().join("l2"));
+    std::os::unix::fs::symlink(&l2, &l1).unwrap();
+    std::os::unix::fs::symlink(&l1, &l2).unwrap();
+    let t = std::time::Instant::now();
+    let err = fails_one_line(&["demo", "--quick", "--force", "--out", s(&l1)]);
+    assert!(err.contains("does not resolve"), "{err}");
+    assert!(t.elapsed().as_secs_f64() < 0.5, "refused before any work");
+    // a link to a folder: the link stays, the folder gets the report
+    let real = dir.path().join("real");
+    std::fs::create_dir(&real).unwrap();
+    let link = dir.path().join("link");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    ok(&["demo", "--quick", "--out", s(&link)]);
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(real.join("report.md").exists());
+}
+
+/// Class 4: zeta of extreme but valid scalings (mass 1e-300 printed
+/// `zeta = inf`, 1e300 `zeta = 0.000000`, JSON null).
+#[test]
+fn zeta_is_right_at_extreme_scalings() {
+    let dir = tempfile::tempdir().unwrap();
+    for m in ["1e-300", "1e300"] {
+        let mass: f64 = m.parse().unwrap();
+        let model = write(
+            dir.path(),
+            "m.toml",
+            &format!(
+                "mass = {m}\nstiffness = {:e}\ndamping = {:e}\n",
+                mass * 3947.84,
+                mass * 1.256_637
+            ),
+        );
+        let v: serde_json::Value = serde_json::from_str(&ok(&[
+            "frf", "--model", s(&model), "--gamma", "1", "--f-min", "9", "--f-max", "11", "--steps", "3", "--json",
+        ]))
+        .unwrap();
+        let z = v["zeta"].as_f64().unwrap_or(f64::NAN);
+        assert!((z - 0.01).abs() < 1e-6, "mass {m}: zeta {z}");
+    }
+}

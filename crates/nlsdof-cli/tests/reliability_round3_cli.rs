@@ -151,3 +151,27 @@ fn zeta_is_right_at_extreme_scalings() {
         assert!((z - 0.01).abs() < 1e-6, "mass {m}: zeta {z}");
     }
 }
+
+/// Class 5: a figure name whose format the option cannot write is refused
+/// in one line and nothing is written (`decay --plot d.png` wrote SVG into
+/// d.png); one policy for every figure option.
+#[test]
+fn figure_names_follow_one_policy() {
+    let dir = tempfile::tempdir().unwrap();
+    let decay = decay_record(dir.path());
+    let model = example("duffing-strong.toml");
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let (png, svg, bare) = (p("d.png"), p("d.svg"), p("d"));
+    let runs: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["decay", "--input", s(&decay), "--column", "x", "--plot", &png], "written as SVG"),
+        (vec!["decay", "--input", s(&decay), "--column", "x", "--plot", &bare], "written as SVG"),
+        (vec!["frf", "--model", s(&model), "--gamma", "1", "--f-min", "8", "--f-max", "12", "--steps", "5", "--plot", &png], "written as SVG"),
+        (vec!["spectrogram", "--input", s(&decay), "--column", "x", "--plot", &svg], "written as PNG"),
+        (vec!["spectrogram", "--input", s(&decay), "--column", "x", "--waterfall", &svg], "written as PNG"),
+    ];
+    for (args, want) in runs {
+        let err = fails_one_line(&args);
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "{args:?} wrote a file");
+    }
+}

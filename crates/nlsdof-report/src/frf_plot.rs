@@ -343,19 +343,6 @@ mod tests {
 /// `--plot` of the SVG plots: a name asking for another format (`.png`,
 /// `.pdf`, ...) is refused instead of getting SVG content under it.
 pub fn check_svg_name(path: Option<&std::path::Path>) -> Result<(), ReportError> {
-    let Some(path) = path else { return Ok(()) };
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    const OTHER: [&str; 12] = [
-        "png", "jpg", "jpeg", "gif", "bmp", "pdf", "eps", "ps", "tif", "tiff", "webp", "html",
-    ];
-    if OTHER.contains(&ext.as_str()) {
-        return Err(ReportError::Invalid(format!(
-            "--plot {}: this plot is written as SVG only; give a .svg file name (PNG figures: nlsdof spectrogram --plot)",
-            path.display()
-        )));
-    }
-    Ok(())
+    crate::figure_file::check_figure("--plot", path, &[crate::figure_file::FigureFormat::Svg])
+        .map(|_| ())
 }

@@ -19,20 +19,14 @@ pub enum Kind {
 
 /// The format asked for by `path`'s extension.
 pub fn kind_of(path: &Path) -> Result<Kind, ReportError> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .as_deref()
-    {
-        Some("json") => Ok(Kind::Json),
-        Some("svg") => Ok(Kind::Svg),
-        Some("png") => Ok(Kind::Png),
-        _ => Err(ReportError::Invalid(format!(
-            "--landscape {}: the name must end in .json, .svg or .png",
-            path.display()
-        ))),
-    }
+    use crate::figure_file::{figure_format, FigureFormat as F};
+    Ok(
+        match figure_format("--landscape", path, &[F::Json, F::Svg, F::Png])? {
+            F::Json => Kind::Json,
+            F::Svg => Kind::Svg,
+            F::Png => Kind::Png,
+        },
+    )
 }
 
 /// The file's bytes.

@@ -33,6 +33,7 @@
 
 pub mod decay;
 pub mod demo;
+pub mod figure_file;
 pub mod fit;
 pub mod frf_plot;
 pub mod landscape;

@@ -80,6 +80,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             a.bins
         )));
     }
+    nlsdof_report::frf_plot::check_svg_name(a.plot.as_deref())?;
     if let Some(p) = &a.plot {
         nlsdof_io::atomic::check_targets(&[("--plot", p)])?;
     }

@@ -261,6 +261,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
             "--compare-column needs --compare FILE".into(),
         ));
     }
+    {
+        use nlsdof_report::figure_file::{check_figure, FigureFormat};
+        check_figure("--plot", a.plot.as_deref(), &[FigureFormat::Png])?;
+        check_figure("--waterfall", a.waterfall.as_deref(), &[FigureFormat::Png])?;
+    }
     let outs: Vec<&PathBuf> = [&a.plot, &a.waterfall, &a.csv]
         .into_iter()
         .flatten()

@@ -1,0 +1,96 @@
+//! One policy for every figure option (`--plot`, `--waterfall`,
+//! `--landscape`): the file name's extension decides the format, and a
+//! name whose extension the option cannot write is refused before any work,
+//! in one line naming the option and what it can write. (Issue 30: `decay
+//! --plot d.png` wrote SVG into `d.png`; a name without extension was
+//! accepted as SVG.)
+
+use crate::ReportError;
+use std::path::Path;
+
+/// A figure file's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FigureFormat {
+    Svg,
+    Png,
+    /// The figure's numbers (the landscape grid).
+    Json,
+}
+
+impl FigureFormat {
+    /// The extension, lower case, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            FigureFormat::Svg => "svg",
+            FigureFormat::Png => "png",
+            FigureFormat::Json => "json",
+        }
+    }
+}
+
+/// The format `flag` writes to `path`, from the extension (any case), if it
+/// is one of `supported`; otherwise a one-line error naming the flag, the
+/// file and the formats it can write.
+pub fn figure_format(
+    flag: &str,
+    path: &Path,
+    supported: &[FigureFormat],
+) -> Result<FigureFormat, ReportError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if let Some(f) = supported
+        .iter()
+        .find(|f| Some(f.extension()) == ext.as_deref())
+    {
+        return Ok(*f);
+    }
+    let names: Vec<String> = supported
+        .iter()
+        .map(|f| format!(".{}", f.extension()))
+        .collect();
+    let list = match names.len() {
+        0 => String::new(),
+        1 => names[0].clone(),
+        n => format!("{} or {}", names[..n - 1].join(", "), names[n - 1]),
+    };
+    let upper: Vec<String> = supported
+        .iter()
+        .map(|f| f.extension().to_ascii_uppercase())
+        .collect();
+    Err(ReportError::Invalid(format!(
+        "{flag} {}: this figure is written as {}; give a file name ending in {list}",
+        path.display(),
+        upper.join(" or ")
+    )))
+}
+
+/// [`figure_format`] of an optional `path`.
+pub fn check_figure(
+    flag: &str,
+    path: Option<&Path>,
+    supported: &[FigureFormat],
+) -> Result<Option<FigureFormat>, ReportError> {
+    path.map(|p| figure_format(flag, p, supported)).transpose()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use FigureFormat::*;
+
+    #[test]
+    fn the_extension_decides_and_others_are_refused() {
+        let f = |p: &str, s: &[FigureFormat]| figure_format("--plot", Path::new(p), s);
+        assert_eq!(f("a.svg", &[Svg]).unwrap(), Svg);
+        assert_eq!(f("dir.v2/A.SVG", &[Svg]).unwrap(), Svg);
+        assert_eq!(f("l.png", &[Json, Svg, Png]).unwrap(), Png);
+        for bad in ["d.png", "d", "d.svg.txt", ".svg"] {
+            let e = f(bad, &[Svg]).unwrap_err().to_string();
+            assert!(e.contains("written as SVG") && e.contains(".svg"), "{bad}: {e}");
+        }
+        let e = f("x.pdf", &[Json, Svg, Png]).unwrap_err().to_string();
+        assert!(e.contains(".json, .svg or .png"), "{e}");
+    }
+}

@@ -17,7 +17,12 @@ fn decay_record(dir: &Path) -> PathBuf {
     for k in 0..8000 {
         let t = k as f64 / 1000.0;
         let w = std::f64::consts::TAU * 20.0;
-        writeln!(text, "{t},{:e}", 1e-3 * (-0.01 * w * t).exp() * (w * t).cos()).unwrap();
+        writeln!(
+            text,
+            "{t},{:e}",
+            1e-3 * (-0.01 * w * t).exp() * (w * t).cos()
+        )
+        .unwrap();
     }
     write(dir, "decay.csv", &text)
 }
@@ -35,13 +40,61 @@ struct Inputs {
 fn inputs(dir: &Path) -> Inputs {
     let model = example("duffing-strong.toml");
     let sine = dir.join("sine.csv");
-    ok(&["signal", "chirp", "--amplitude", "1", "--f0", "5", "--f1", "20", "--duration", "20", "--fs", "200", "--out", s(&sine)]);
+    ok(&[
+        "signal",
+        "chirp",
+        "--amplitude",
+        "1",
+        "--f0",
+        "5",
+        "--f1",
+        "20",
+        "--duration",
+        "20",
+        "--fs",
+        "200",
+        "--out",
+        s(&sine),
+    ]);
     let response = dir.join("response.csv");
-    ok(&["simulate", "--model", s(&model), "--input", s(&sine), "--out", s(&response)]);
+    ok(&[
+        "simulate",
+        "--model",
+        s(&model),
+        "--input",
+        s(&sine),
+        "--out",
+        s(&response),
+    ]);
     let frf = dir.join("frf.csv");
-    ok(&["frf-estimate", "--input", s(&response), "--input-channel", "accel", "--output-channel", "x", "--segment", "512", "--out", s(&frf)]);
+    ok(&[
+        "frf-estimate",
+        "--input",
+        s(&response),
+        "--input-channel",
+        "accel",
+        "--output-channel",
+        "x",
+        "--segment",
+        "512",
+        "--out",
+        s(&frf),
+    ]);
     let data = dir.join("data.csv");
-    let csv = ok(&["frf", "--model", s(&model), "--gamma", "0.5,1", "--f-min", "8", "--f-max", "14", "--steps", "30", "--csv"]);
+    let csv = ok(&[
+        "frf",
+        "--model",
+        s(&model),
+        "--gamma",
+        "0.5,1",
+        "--f-min",
+        "8",
+        "--f-max",
+        "14",
+        "--steps",
+        "30",
+        "--csv",
+    ]);
     std::fs::write(&data, csv).unwrap();
     Inputs {
         sine,
@@ -66,23 +119,122 @@ fn a_symlink_loop_as_output_is_refused_by_every_verb() {
     std::os::unix::fs::symlink(&l1, &l2).unwrap();
     let l = s(&l1);
     let runs: Vec<Vec<&str>> = vec![
-        vec!["signal", "sine", "--amplitude", "1", "--freq", "10", "--fs", "100", "--duration", "1", "--out", l],
-        vec!["frf", "--model", s(&model), "--gamma", "1", "--f-min", "8", "--f-max", "12", "--steps", "5", "--plot", l],
-        vec!["simulate", "--model", s(&model), "--input", s(&i.sine), "--out", l],
-        vec!["stepped-sine", "--model", s(&model), "--gamma", "1", "--f-min", "9", "--f-max", "10", "--steps", "2", "--out", l],
+        vec![
+            "signal",
+            "sine",
+            "--amplitude",
+            "1",
+            "--freq",
+            "10",
+            "--fs",
+            "100",
+            "--duration",
+            "1",
+            "--out",
+            l,
+        ],
+        vec![
+            "frf",
+            "--model",
+            s(&model),
+            "--gamma",
+            "1",
+            "--f-min",
+            "8",
+            "--f-max",
+            "12",
+            "--steps",
+            "5",
+            "--plot",
+            l,
+        ],
+        vec![
+            "simulate",
+            "--model",
+            s(&model),
+            "--input",
+            s(&i.sine),
+            "--out",
+            l,
+        ],
+        vec![
+            "stepped-sine",
+            "--model",
+            s(&model),
+            "--gamma",
+            "1",
+            "--f-min",
+            "9",
+            "--f-max",
+            "10",
+            "--steps",
+            "2",
+            "--out",
+            l,
+        ],
         vec!["fit", s(&i.data), "--model", "duffing", "--out", l],
-        vec!["fit-time", "--input", s(&i.response), "--input-column", "accel", "--output-column", "x", "--out", l],
-        vec!["decay", "--input", s(&i.decay), "--column", "x", "--plot", l],
-        vec!["linear-id", s(&i.frf), "--input", "acceleration", "--output", "displacement", "--out", l],
-        vec!["frf-estimate", "--input", s(&i.response), "--input-channel", "accel", "--output-channel", "x", "--segment", "512", "--out", l],
-        vec!["spectrogram", "--input", s(&i.sine), "--column", "accel", "--csv", l],
+        vec![
+            "fit-time",
+            "--input",
+            s(&i.response),
+            "--input-column",
+            "accel",
+            "--output-column",
+            "x",
+            "--out",
+            l,
+        ],
+        vec![
+            "decay",
+            "--input",
+            s(&i.decay),
+            "--column",
+            "x",
+            "--plot",
+            l,
+        ],
+        vec![
+            "linear-id",
+            s(&i.frf),
+            "--input",
+            "acceleration",
+            "--output",
+            "displacement",
+            "--out",
+            l,
+        ],
+        vec![
+            "frf-estimate",
+            "--input",
+            s(&i.response),
+            "--input-channel",
+            "accel",
+            "--output-channel",
+            "x",
+            "--segment",
+            "512",
+            "--out",
+            l,
+        ],
+        vec![
+            "spectrogram",
+            "--input",
+            s(&i.sine),
+            "--column",
+            "accel",
+            "--csv",
+            l,
+        ],
     ];
     for args in &runs {
         let err = fails_one_line(args);
         assert!(err.contains("symbolic link loop"), "{args:?}: {err}");
         for link in [&l1, &l2] {
             assert!(
-                std::fs::symlink_metadata(link).unwrap().file_type().is_symlink(),
+                std::fs::symlink_metadata(link)
+                    .unwrap()
+                    .file_type()
+                    .is_symlink(),
                 "{args:?} replaced {}",
                 link.display()
             );
@@ -98,7 +250,10 @@ fn a_symlink_loop_as_output_is_refused_by_every_verb() {
 fn demo_leaves_nothing_when_it_fails_and_keeps_a_linked_folder() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_nlsdof"))
         .args(["demo", "--quick", "--json", "--out", s(&out)])
         .stdout(full)
@@ -106,9 +261,17 @@ fn demo_leaves_nothing_when_it_fails_and_keeps_a_linked_folder() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "one line, no progress lines: {err}");
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "one line, no progress lines: {err}"
+    );
     assert!(!out.exists(), "the demo folder was left behind");
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing left");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "nothing left"
+    );
     // a loop: refused at once
     let (l1, l2) = (dir.path().join("l1"), dir.path().join("l2"));
     std::os::unix::fs::symlink(&l2, &l1).unwrap();
@@ -123,7 +286,10 @@ fn demo_leaves_nothing_when_it_fails_and_keeps_a_linked_folder() {
     let link = dir.path().join("link");
     std::os::unix::fs::symlink(&real, &link).unwrap();
     ok(&["demo", "--quick", "--out", s(&link)]);
-    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
     assert!(real.join("report.md").exists());
 }
 
@@ -144,7 +310,18 @@ fn zeta_is_right_at_extreme_scalings() {
             ),
         );
         let v: serde_json::Value = serde_json::from_str(&ok(&[
-            "frf", "--model", s(&model), "--gamma", "1", "--f-min", "9", "--f-max", "11", "--steps", "3", "--json",
+            "frf",
+            "--model",
+            s(&model),
+            "--gamma",
+            "1",
+            "--f-min",
+            "9",
+            "--f-max",
+            "11",
+            "--steps",
+            "3",
+            "--json",
         ]))
         .unwrap();
         let z = v["zeta"].as_f64().unwrap_or(f64::NAN);
@@ -163,15 +340,147 @@ fn figure_names_follow_one_policy() {
     let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
     let (png, svg, bare) = (p("d.png"), p("d.svg"), p("d"));
     let runs: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["decay", "--input", s(&decay), "--column", "x", "--plot", &png], "written as SVG"),
-        (vec!["decay", "--input", s(&decay), "--column", "x", "--plot", &bare], "written as SVG"),
-        (vec!["frf", "--model", s(&model), "--gamma", "1", "--f-min", "8", "--f-max", "12", "--steps", "5", "--plot", &png], "written as SVG"),
-        (vec!["spectrogram", "--input", s(&decay), "--column", "x", "--plot", &svg], "written as PNG"),
-        (vec!["spectrogram", "--input", s(&decay), "--column", "x", "--waterfall", &svg], "written as PNG"),
+        (
+            vec![
+                "decay",
+                "--input",
+                s(&decay),
+                "--column",
+                "x",
+                "--plot",
+                &png,
+            ],
+            "written as SVG",
+        ),
+        (
+            vec![
+                "decay",
+                "--input",
+                s(&decay),
+                "--column",
+                "x",
+                "--plot",
+                &bare,
+            ],
+            "written as SVG",
+        ),
+        (
+            vec![
+                "frf",
+                "--model",
+                s(&model),
+                "--gamma",
+                "1",
+                "--f-min",
+                "8",
+                "--f-max",
+                "12",
+                "--steps",
+                "5",
+                "--plot",
+                &png,
+            ],
+            "written as SVG",
+        ),
+        (
+            vec![
+                "spectrogram",
+                "--input",
+                s(&decay),
+                "--column",
+                "x",
+                "--plot",
+                &svg,
+            ],
+            "written as PNG",
+        ),
+        (
+            vec![
+                "spectrogram",
+                "--input",
+                s(&decay),
+                "--column",
+                "x",
+                "--waterfall",
+                &svg,
+            ],
+            "written as PNG",
+        ),
     ];
     for (args, want) in runs {
         let err = fails_one_line(&args);
         assert!(err.contains(want), "{args:?}: {err}");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "{args:?} wrote a file");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            1,
+            "{args:?} wrote a file"
+        );
     }
+}
+
+/// Class 6: the column-table reader of `fit-time` and `decay` quoted a gzip
+/// header, binary garbage or UTF-16 text raw. Now each is named for what it
+/// is, in one printable line.
+#[test]
+fn binary_and_utf16_inputs_are_named_not_dumped() {
+    let dir = tempfile::tempdir().unwrap();
+    let utf16: Vec<u8> = "t,x\n0,1\n1,2\n".bytes().flat_map(|b| [b, 0]).collect();
+    let mut garbage: Vec<u8> = (0..2000u32).map(|i| (i * 7919 % 251) as u8).collect();
+    garbage[10] = 0;
+    let mut mat = b"MATLAB 5.0 MAT-file, Platform: GLNXA64".to_vec();
+    mat.extend([0u8; 100]);
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "g.csv.gz",
+            vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 3, b'\n', 0, 7],
+            "gzip",
+        ),
+        ("b.csv", garbage, "binary data"),
+        ("u.csv", utf16, "UTF-16"),
+        (
+            "bom16.csv",
+            [
+                &[0xffu8, 0xfe][..],
+                &"t".bytes().flat_map(|b| [b, 0]).collect::<Vec<u8>>(),
+            ]
+            .concat(),
+            "UTF-16",
+        ),
+        ("m.mat", mat, "MAT-file"),
+    ];
+    for (name, bytes, want) in cases {
+        let p = dir.path().join(name);
+        std::fs::write(&p, &bytes).unwrap();
+        for args in [
+            vec!["decay", "--input", s(&p), "--column", "x", "--fs", "100"],
+            vec![
+                "fit-time",
+                "--input",
+                s(&p),
+                "--input-column",
+                "u",
+                "--output-column",
+                "y",
+                "--fs",
+                "100",
+            ],
+        ] {
+            let err = fails_one_line(&args);
+            assert!(err.contains(want), "{args:?}: {err}");
+            assert!(
+                !err.trim_end()
+                    .chars()
+                    .any(|c| c.is_control() || c == '\u{fffd}'),
+                "{args:?}: raw bytes in {err:?}"
+            );
+        }
+    }
+    // text that is merely odd is quoted escaped and short
+    let odd = write(
+        dir.path(),
+        "odd.csv",
+        &format!("t,x\n0,1\n1,a\u{2028}{}\n2,3\n", "z".repeat(300)),
+    );
+    let err = fails_one_line(&["decay", "--input", s(&odd), "--column", "x"]);
+    assert!(err.len() < 300 && err.contains("\\u{2028}"), "{err}");
 }

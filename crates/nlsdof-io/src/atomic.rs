@@ -463,12 +463,21 @@ mod tests {
         let e = write_atomic(&l1, b"x").unwrap_err();
         assert!(e.to_string().contains("symbolic link loop"), "{e}");
         assert!(check_targets(&[("--out", &l1)]).is_err());
-        assert!(std::fs::symlink_metadata(&l1).unwrap().file_type().is_symlink());
+        assert!(std::fs::symlink_metadata(&l1)
+            .unwrap()
+            .file_type()
+            .is_symlink());
         let dangling = dir.path().join("d");
         std::os::unix::fs::symlink("target.csv", &dangling).unwrap();
         write_atomic(&dangling, b"data").unwrap();
-        assert!(std::fs::symlink_metadata(&dangling).unwrap().file_type().is_symlink());
-        assert_eq!(std::fs::read(dir.path().join("target.csv")).unwrap(), b"data");
+        assert!(std::fs::symlink_metadata(&dangling)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(
+            std::fs::read(dir.path().join("target.csv")).unwrap(),
+            b"data"
+        );
     }
 
     #[test]

@@ -77,7 +77,10 @@ impl std::fmt::Display for CsvReadError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             CsvReadError::Io(e) => write!(f, "{e}"),
-            CsvReadError::Utf8 { .. } => write!(f, "stream did not contain valid UTF-8"),
+            CsvReadError::Utf8 { line } => write!(
+                f,
+                "line {line} is not UTF-8 text (a Latin-1 or Windows-1252 file? save it as UTF-8)"
+            ),
         }
     }
 }

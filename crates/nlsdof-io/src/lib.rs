@@ -29,6 +29,7 @@ pub mod phase_resonance_data;
 pub mod signal_file;
 pub mod stepped_sine_data;
 pub mod table_file;
+pub mod text;
 
 pub use error::IoError;
 

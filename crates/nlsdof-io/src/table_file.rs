@@ -31,22 +31,24 @@ pub enum TableError {
     },
     #[error("{path}: no data rows")]
     Empty { path: PathBuf },
+    #[error("{path}: {what}")]
+    NotText { path: PathBuf, what: String },
     #[error(
-        "{path}: no column {wanted:?} (columns: {found}; give a header name or a 0-based index)"
+        "{path}: no column \"{wanted}\" (columns: {found}; give a header name or a 0-based index)", wanted = crate::text::shown(.wanted), found = crate::text::shown(.found)
     )]
     MissingColumn {
         path: PathBuf,
         wanted: String,
         found: String,
     },
-    #[error("{path}: line {line}: column {column:?} is missing (the line has {fields} field(s))")]
+    #[error("{path}: line {line}: column \"{column}\" is missing (the line has {fields} field(s))", column = crate::text::shown(.column))]
     ShortLine {
         path: PathBuf,
         line: u64,
         column: String,
         fields: usize,
     },
-    #[error("{path}: line {line}: column {column:?}: {field:?} is not a finite number")]
+    #[error("{path}: line {line}: column \"{column}\": \"{field}\" is not a finite number", column = crate::text::shown(.column), field = crate::text::shown(.field))]
     NotANumber {
         path: PathBuf,
         line: u64,
@@ -78,6 +80,12 @@ pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
 
 /// [`read_columns`] on bytes in memory (`path` names the data in errors).
 pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
+    if let Some(what) = crate::text::not_text(bytes) {
+        return Err(TableError::NotText {
+            path: path.into(),
+            what,
+        });
+    }
     let text = String::from_utf8_lossy(bytes);
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     // LabVIEW .lvm: two header blocks, each ending with ***End_of_Header***

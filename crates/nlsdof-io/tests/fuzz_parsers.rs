@@ -1,7 +1,9 @@
 //! Parser fuzzing (issue 11, item 12): structured mutations of valid files
 //! for every parser of nlsdof-io — model TOML, fit CSV, phase-resonance CSV,
 //! beam txt, Polytec ASCII (time histories and swept-sine FRF exports),
-//! signal CSV, MAT v5, bounds TOML and FRF CSV.
+//! signal CSV, MAT v5, bounds TOML, FRF CSV and the column tables of
+//! `fit-time` and `decay` (CSV, tab, LabVIEW .lvm, Polytec ASCII; issue 30:
+//! every error message of that reader must also be one printable line).
 //!
 //! Each input is a valid seed file with 1 to 4 stacked mutations: numbers
 //! replaced by edge values (NaN, inf, 1e308, subnormals, huge integers,
@@ -749,6 +751,17 @@ fn bounds_seeds() -> Vec<Vec<u8>> {
     ]
 }
 
+fn column_table_seeds() -> Vec<Vec<u8>> {
+    vec![
+        b"\"V1\",\"V2\",\n0.0057756,0.0093978,\n0.0066102,0.012971,\n-0.001,0.002,\n".to_vec(),
+        b"u;y\n1;2\n3;4\n5;6\n".to_vec(),
+        b"t\tu\ty\n0\t1\t2\n0.1\t3\t4\n0.2\t5\t6\n".to_vec(),
+        b"LabVIEW Measurement\t\nWriter_Version\t2\n***End_of_Header***\t\n\nChannels\t2\n***End_of_Header***\t\nX_Value\tV1\tV2\tComment\n0\t1\t2\n0.001\t3\t4\n".to_vec(),
+        b"Source File Name:\tt3\r\nSignal:\tTime\r\n\r\nTime\tV1\tV2\r\n[ s ]\t[ V ]\t[ V ]\r\n0\t1.5\t2\r\n0.0001\t2.5\t3\r\n".to_vec(),
+        b"# comment\n0,1\n2,3\n4,5\n".to_vec(),
+    ]
+}
+
 fn frf_csv_seeds() -> Vec<Vec<u8>> {
     let mut a = String::from("f_hz,re,im\n");
     let mut b = String::from("f_hz,mag,phase_deg\n");
@@ -858,6 +871,21 @@ fn parsers() -> Vec<(&'static str, Vec<Vec<u8>>, Parse)> {
                     );
                     for (name, lo, hi) in bounds {
                         let _ = spec.set_bounds(&name, lo, hi);
+                    }
+                }
+            }),
+        ),
+        (
+            "column table (fit-time, decay)",
+            column_table_seeds(),
+            Box::new(move |b: &[u8]| {
+                for wanted in [&["V1", "V2"][..], &["0", "1"][..], &["u", "y"][..]] {
+                    if let Err(e) = table_file::parse_columns(b, p, wanted) {
+                        let m = e.to_string();
+                        assert!(
+                            !m.chars().any(|c| c.is_control() || c == '\u{fffd}'),
+                            "not one printable line: {m:?}"
+                        );
                     }
                 }
             }),
@@ -1006,6 +1034,9 @@ fn seeds_are_valid() {
     }
     for s in frf_csv_seeds() {
         frf_file::parse_frf_csv(&text(&s), p).unwrap();
+    }
+    for s in column_table_seeds() {
+        table_file::parse_columns(&s, p, &["0", "1"]).unwrap();
     }
 }
 

@@ -88,7 +88,10 @@ mod tests {
         assert_eq!(f("l.png", &[Json, Svg, Png]).unwrap(), Png);
         for bad in ["d.png", "d", "d.svg.txt", ".svg"] {
             let e = f(bad, &[Svg]).unwrap_err().to_string();
-            assert!(e.contains("written as SVG") && e.contains(".svg"), "{bad}: {e}");
+            assert!(
+                e.contains("written as SVG") && e.contains(".svg"),
+                "{bad}: {e}"
+            );
         }
         let e = f("x.pdf", &[Json, Svg, Png]).unwrap_err().to_string();
         assert!(e.contains(".json, .svg or .png"), "{e}");

@@ -22,11 +22,11 @@
 
 mod progress;
 
-use std::io::Write as _;
 use crate::error::CliError;
 use nlsdof::demo::{Demo, DemoSettings};
 use nlsdof_io::atomic::{check_out_dir, StagedDir};
 use nlsdof_report::demo as report;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -57,5 +57,4 @@ impl DemoProgress for Bars {
             .expect("no panic while locked")
             .push(format!("nlsdof demo: {name:<22} {seconds:>6.2} s"));
     }
-
 }

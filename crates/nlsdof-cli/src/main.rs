@@ -59,6 +59,47 @@ enum Command {
     Demo(cmd::demo::Args),
 }
 
+/// Whether standard output (file descriptor 1) was closed when the process
+/// started (`nlsdof equiv --mu 2 >&-`). Rust's runtime reopens a closed
+/// standard descriptor on /dev/null before `main`, after which every write
+/// "succeeds" and the output is lost without a word; a constructor in
+/// `.init_array` runs before that and records it. (Hand-written because the
+/// runtime's reopening cannot be turned off; `fcntl` is declared here to
+/// avoid a dependency for one call.)
+#[cfg(target_os = "linux")]
+mod closed_stdout {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    static CLOSED: AtomicBool = AtomicBool::new(false);
+
+    extern "C" {
+        fn fcntl(fd: i32, cmd: i32, ...) -> i32;
+    }
+    const F_GETFD: i32 = 1;
+
+    extern "C" fn check() {
+        // SAFETY: F_GETFD only queries the descriptor flags.
+        if unsafe { fcntl(1, F_GETFD) } == -1 {
+            CLOSED.store(true, Ordering::Relaxed);
+        }
+    }
+
+    #[used]
+    #[link_section = ".init_array"]
+    static INIT: extern "C" fn() = check;
+
+    pub fn was_closed() -> bool {
+        CLOSED.load(Ordering::Relaxed)
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+mod closed_stdout {
+    pub fn was_closed() -> bool {
+        false
+    }
+}
+
 /// Standard output failed: a closed pipe ends quietly as Unix tools do (exit
 /// 141, what a shell reports for SIGPIPE), any other error is one line and
 /// exit 2. No output file is committed in either case.
@@ -113,6 +154,14 @@ fn main() {
         std::process::exit(130);
     })
     .ok();
+    // every verb writes to standard output: a closed one is an error before
+    // any work, as any later write error would be
+    if closed_stdout::was_closed() {
+        stdout_failed(&std::io::Error::new(
+            std::io::ErrorKind::Other,
+            "it is closed (file descriptor 1)",
+        ));
+    }
     let cli = Cli::try_parse().unwrap_or_else(|e| {
         use clap::error::ErrorKind as K;
         if !e.use_stderr()

@@ -484,3 +484,30 @@ fn binary_and_utf16_inputs_are_named_not_dumped() {
     let err = fails_one_line(&["decay", "--input", s(&odd), "--column", "x"]);
     assert!(err.len() < 300 && err.contains("\\u{2028}"), "{err}");
 }
+
+/// Class 9: a closed standard output was swallowed (`equiv --mu 2 >&-`
+/// exited 0 and printed nothing). It is an error before any work, as any
+/// other standard-output failure, and no file is written.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_closed_stdout_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.csv");
+    for args in [
+        vec!["equiv", "--mu", "2"],
+        vec!["signal", "sine", "--amplitude", "1", "--freq", "10", "--fs", "100", "--duration", "1", "--out", s(&out)],
+    ] {
+        let o = std::process::Command::new("sh")
+            .arg("-c")
+            .arg("exec \"$0\" \"$@\" >&-")
+            .arg(env!("CARGO_BIN_EXE_nlsdof"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("standard output") && err.contains("closed"), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+}

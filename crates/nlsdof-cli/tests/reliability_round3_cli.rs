@@ -495,7 +495,20 @@ fn a_closed_stdout_is_an_error() {
     let out = dir.path().join("s.csv");
     for args in [
         vec!["equiv", "--mu", "2"],
-        vec!["signal", "sine", "--amplitude", "1", "--freq", "10", "--fs", "100", "--duration", "1", "--out", s(&out)],
+        vec![
+            "signal",
+            "sine",
+            "--amplitude",
+            "1",
+            "--freq",
+            "10",
+            "--fs",
+            "100",
+            "--duration",
+            "1",
+            "--out",
+            s(&out),
+        ],
     ] {
         let o = std::process::Command::new("sh")
             .arg("-c")
@@ -506,8 +519,96 @@ fn a_closed_stdout_is_an_error() {
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
-        assert!(err.contains("standard output") && err.contains("closed"), "{err}");
+        assert!(
+            err.contains("standard output") && err.contains("closed"),
+            "{err}"
+        );
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(!out.exists());
+    }
+}
+
+/// Class 7: unbounded work is refused up front with the limit and its reason
+/// (nlsdof::limits), in one line and well under a second.
+#[test]
+fn unbounded_work_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let decay = decay_record(dir.path());
+    let model = example("duffing-strong.toml");
+    let mut pr = String::from("gamma,f_hz,amplitude\n");
+    for i in 0..20_000 {
+        writeln!(
+            pr,
+            "{},{},1e-3",
+            1.0 + i as f64 * 1e-3,
+            10.0 + i as f64 * 1e-4
+        )
+        .unwrap();
+    }
+    let pr = write(dir.path(), "pr.csv", &pr);
+    let mut frf = String::from("f_hz,re,im\n");
+    for i in 0..1_000_100 {
+        writeln!(frf, "{},1e-4,1e-6", 1.0 + i as f64 * 1e-4).unwrap();
+    }
+    let frf = write(dir.path(), "frf.csv", &frf);
+    let runs: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "decay",
+                "--input",
+                s(&decay),
+                "--column",
+                "x",
+                "--bins",
+                "1000000000",
+            ],
+            "amplitude bins",
+        ),
+        (
+            vec![
+                "frf",
+                "--model",
+                s(&model),
+                "--gamma",
+                "1",
+                "--f-min",
+                "8",
+                "--f-max",
+                "14",
+                "--steps",
+                "5000",
+                "--harmonics",
+                "64",
+            ],
+            "steps x levels x H^3",
+        ),
+        (
+            vec!["fit", s(&pr), "--phase-resonance"],
+            "phase-resonance points",
+        ),
+        (
+            vec![
+                "linear-id",
+                s(&frf),
+                "--input",
+                "acceleration",
+                "--output",
+                "displacement",
+            ],
+            "FRF lines",
+        ),
+    ];
+    for (args, want) in runs {
+        let t = std::time::Instant::now();
+        let err = fails_one_line(&args);
+        assert!(
+            err.contains(want) && err.contains("above the limit"),
+            "{args:?}: {err}"
+        );
+        assert!(
+            t.elapsed().as_secs_f64() < 5.0,
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
     }
 }

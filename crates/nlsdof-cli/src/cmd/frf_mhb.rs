@@ -71,7 +71,10 @@ pub fn run(
     check_damped(model, "--harmonics")?;
     let gain = args.input_gain;
     let model_gammas: Vec<f64> = gammas.iter().map(|g| gain * g).collect();
-    let mut levels = level_sweeps(model, &model_gammas, omegas, args.sweep, h)?;
+    // a spinner after 1 s (the work is bounded by limits::MULTI_HARMONIC_WORK)
+    let mut levels = crate::cmd::simulate::with_spinner("multi-harmonic continuation", || {
+        level_sweeps(model, &model_gammas, omegas, args.sweep, h)
+    })?;
     // the reports give the levels as given
     for (l, &g) in levels.iter_mut().zip(gammas) {
         l.gamma = g;

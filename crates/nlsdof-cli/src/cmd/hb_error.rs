@@ -109,16 +109,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut studies = Vec::new();
     for &g in &gammas {
         // the model sees input_gain * gamma; the report gives gamma as given
-        let st = truncation_study(
-            &n,
-            gain * g,
-            2.0 * PI * f_min,
-            2.0 * PI * f_max,
-            &ladder,
-            args.tol,
-            nlsdof::multi_harmonic::settings_for(&n),
-            &ContinuationOptions::default(),
-        )?;
+        let st = crate::cmd::simulate::with_spinner("truncation study", || {
+            truncation_study(
+                &n,
+                gain * g,
+                2.0 * PI * f_min,
+                2.0 * PI * f_max,
+                &ladder,
+                args.tol,
+                nlsdof::multi_harmonic::settings_for(&n),
+                &ContinuationOptions::default(),
+            )
+        })?;
         if !st.converged {
             let last = st.rows.last().map(|r| r.change).unwrap_or(f64::NAN);
             eprintln!(

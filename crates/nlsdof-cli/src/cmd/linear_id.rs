@@ -199,6 +199,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             args.frf.display()
         )),
         SdofIdError::Fit(e) => e.into(),
+        SdofIdError::Limit(e) => usage(format!("{}: {e}", args.frf.display())),
     })?;
     let f_hz: Vec<f64> = id.points.iter().map(|&i| table.f_hz[i]).collect();
     // Build everything before writing anything.

@@ -63,6 +63,8 @@ pub enum DecayError {
     NoDecay { start: f64, end: f64 },
     #[error("the {what} fit failed (too few distinct amplitude bins: {bins})")]
     FitFailed { what: &'static str, bins: usize },
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
 }
 
 /// The analysed decay ends where the envelope falls below this fraction of
@@ -346,6 +348,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     if !(fs.is_finite() && fs > 0.0) {
         return Err(DecayError::NonPositiveFs { fs });
     }
+    crate::limits::DECAY_BINS.check(opts.bins as f64)?;
     if let Some((index, &value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(DecayError::NonFinite { index, value });
     }

@@ -114,6 +114,8 @@ pub struct PrDataset {
 pub enum PrDataError {
     #[error("no phase-resonance points")]
     Empty,
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
     #[error("level {level}: {what} = {value} is not a finite number")]
     NotFinite {
         level: String,
@@ -144,6 +146,7 @@ impl PrDataset {
         if points.is_empty() {
             return Err(PrDataError::Empty);
         }
+        crate::limits::PHASE_RESONANCE_POINTS.check(points.len() as f64)?;
         for p in &points {
             let f_hz = p.omega / TWO_PI;
             for (what, v) in [

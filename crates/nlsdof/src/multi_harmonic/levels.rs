@@ -37,6 +37,8 @@ pub fn level_sweeps(
     if n.delta == 0.0 && n.kappa == 0.0 {
         return Err(MhbError::Undamped);
     }
+    crate::limits::MULTI_HARMONIC_WORK
+        .check(omegas.len() as f64 * gammas.len() as f64 * (h as f64).powi(3))?;
     let mut out = Vec::with_capacity(gammas.len());
     for &gamma in gammas {
         let s = sweep(

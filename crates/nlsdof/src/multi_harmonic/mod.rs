@@ -57,6 +57,8 @@ pub enum MhbError {
     #[error(transparent)]
     Parameter(#[from] ParameterError),
     #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
+    #[error(transparent)]
     Solve(#[from] SolveError),
     /// No damping at all (c = 0 and no c_e term): no forced steady state at
     /// resonance, every periodic solution only neutrally stable.

@@ -151,8 +151,10 @@ pub struct SdofIdentification {
 /// Errors of [`identify_sdof`].
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SdofIdError {
-    #[error("no FRF point in [{low}, {high}] rad/s")]
+    #[error("no FRF point in [{low_hz}, {high_hz}] Hz ([{low}, {high}] rad/s)", low_hz = .low / std::f64::consts::TAU, high_hz = .high / std::f64::consts::TAU)]
     EmptyBand { low: f64, high: f64 },
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
     #[error("amplitude-only FRF and the half-power method failed: {0}")]
     HalfPowerFailed(VectorFitError),
     #[error(transparent)]
@@ -176,6 +178,7 @@ pub fn identify_sdof(
     if points.is_empty() {
         return Err(SdofIdError::EmptyBand { low: lo, high: hi });
     }
+    crate::limits::FRF_LINES.check(points.len() as f64)?;
     let omega: Vec<f64> = points.iter().map(|&i| frf.omega[i]).collect();
     let magnitude: Vec<f64> = points.iter().map(|&i| frf.magnitude[i]).collect();
     let values: Option<Vec<C64>> = frf

@@ -77,7 +77,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if !(args.tol.is_finite() && args.tol > 0.0 && args.tol < 1.0) {
         return Err(CliError::Usage(format!(
-            "--tol {} is not allowed: need 0 < tol < 1",
+            "--tol {:e} is not allowed: need 0 < tol < 1",
             args.tol
         )));
     }
@@ -122,9 +122,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             )
         })?;
         if !st.converged {
-            let last = st.rows.last().map(|r| r.change).unwrap_or(f64::NAN);
+            // no NaN in a message: one H has no change to compare
+            let last = match st.rows.last().map(|r| r.change) {
+                Some(c) if c.is_finite() => format!("last change {c:.3e}"),
+                _ => "one H only: nothing to compare; give --h-max 3 or more".into(),
+            };
             eprintln!(
-                "nlsdof: warning: gamma = {g}: not converged to --tol {} by H = {} (last change {last:.3e}); errors are against H = {}",
+                "nlsdof: warning: gamma = {g}: not converged to --tol {:e} by H = {} ({last}); errors are against H = {}",
                 args.tol,
                 ladder.last().unwrap_or(&1),
                 st.rows[st.reference].harmonics

@@ -434,6 +434,17 @@ fn run(
     let h = sys.harmonics();
     let n = n_coefficients(h);
     let qs = sys.gamma() / sys.model().alpha;
+    // first point: damped Newton at fixed p with N adaptation (the solver
+    // of `solve_at`; the undamped corrector of the continuation diverged from
+    // the first-order start of a friction oscillator far below resonance,
+    // issue 30: Coulomb from 2 Hz)
+    let om0 = if param == Parameter::Omega {
+        p_start
+    } else {
+        fixed
+    };
+    let mut q0 = q0;
+    super::solve_from(sys, om0, &mut q0)?;
     let mut c = Cont {
         sys,
         param,
@@ -453,31 +464,10 @@ fn run(
     let p_hi = p_start.max(p_end);
     let dp_max = opts.max_dp * (p_hi - p_lo) / ps;
 
-    // first point: Newton at fixed p, with N adaptation
     let mut y: Vec<f64> = q0.iter().map(|v| v / qs).collect();
     y.push(p_start / ps);
     let mut ep = vec![0.0; n + 1];
     ep[n] = 1.0;
-    let y_fix = y.clone();
-    for _ in 0..12 {
-        c.correct(&mut y, &ep, &y_fix, c.sys.settings.max_iterations)
-            .ok_or(MhbError::NoConvergence {
-                omega: p_start,
-                iterations: c.sys.settings.max_iterations,
-                residual: f64::NAN,
-            })?;
-        let (q, _) = c.pq(&y);
-        let om = if param == Parameter::Omega {
-            p_start
-        } else {
-            fixed
-        };
-        let n0 = c.sys.samples();
-        c.sys.adapt_samples(&q, om)?;
-        if c.sys.samples() == n0 {
-            break;
-        }
-    }
     let mut t_prev = vec![0.0; n + 1];
     t_prev[n] = dir;
     let mut t = c.tangent(&y, &t_prev).ok_or(MhbError::Singular {

@@ -52,6 +52,16 @@ use crate::harmonic_balance::{ForcedResponse, Formulation};
 use thiserror::Error;
 
 /// Errors of the multi-harmonic balance; each carries the offending value.
+/// ` (residual/gamma R)` when the residual is known (finite), else nothing:
+/// no NaN in a message (issue 30).
+fn residual_note(residual: f64) -> String {
+    if residual.is_finite() {
+        format!(" (residual/gamma {residual:e})")
+    } else {
+        String::new()
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum MhbError {
     #[error(transparent)]
@@ -74,7 +84,7 @@ pub enum MhbError {
         estimate: f64,
         tolerance: f64,
     },
-    #[error("Newton did not converge at {omega_hz} Hz ({omega} rad/s) after {iterations} iterations (residual/gamma {residual:e})", omega_hz = .omega / std::f64::consts::TAU)]
+    #[error("Newton did not converge at {omega_hz} Hz ({omega} rad/s) after {iterations} iterations{residual_note}", omega_hz = .omega / std::f64::consts::TAU, residual_note = residual_note(*.residual))]
     NoConvergence {
         omega: f64,
         iterations: usize,

@@ -694,3 +694,68 @@ fn multi_harmonic_coulomb_covers_the_example_band_and_messages_have_no_nan() {
         }
     }
 }
+
+/// Class 4: `decay` on a record that is not a free decay (a chirp response
+/// after its resonance) printed nonsense with exit 0 and "envelope error NaN
+/// %". Now the verdict is the first line and in JSON (`adequate: false`).
+#[test]
+fn decay_of_a_forced_response_says_so_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = example("duffing-strong.toml");
+    let chirp = dir.path().join("c.csv");
+    ok(&[
+        "signal",
+        "chirp",
+        "--amplitude",
+        "1",
+        "--f0",
+        "5",
+        "--f1",
+        "20",
+        "--duration",
+        "20",
+        "--fs",
+        "200",
+        "--out",
+        s(&chirp),
+    ]);
+    let resp = dir.path().join("r.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        s(&model),
+        "--input",
+        s(&chirp),
+        "--out",
+        s(&resp),
+    ]);
+    let text = ok(&["decay", "--input", s(&resp), "--column", "x"]);
+    assert!(
+        text.starts_with("WARNING: the fitted model's free decay misses"),
+        "{text}"
+    );
+    assert!(!text.contains("NaN"), "{text}");
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "decay",
+        "--input",
+        s(&resp),
+        "--column",
+        "x",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(v["adequate"], false);
+    // a true free decay is adequate and quiet
+    let decay = decay_record(dir.path());
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "decay",
+        "--input",
+        s(&decay),
+        "--column",
+        "x",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(v["adequate"], true, "{v}");
+    assert!(v["envelope_error"].as_f64().unwrap() < 0.05);
+}

@@ -26,7 +26,18 @@
 //!
 //!    each fitted by a grid over the exponent with linear least squares for
 //!    the coefficients, refined by Levenberg–Marquardt over all three;
-//!    95 % intervals from `s² (JᵀJ)⁻¹`.
+//!    95 % intervals from `s² (JᵀJ)⁻¹`. The exponents range over
+//!    [`EXPONENT_RANGE`] = [−1, 10] (η = −1: Coulomb friction, a result
+//!    reported as such; ρ likewise from −1): a fit at 10 is flagged
+//!    ([`Fitted::at_bounds`]). δ and κ are ≥ 0 (a decay cannot be fed by
+//!    damping): their intervals are taken on `ln` of the value (delta
+//!    method) so they stay positive, and a coefficient at 0 gets `[0, upper]`
+//!    and is named (its exponent is then without effect).
+//! 3′. **A free decay only falls**: every bin's decay rate must be > 0
+//!    (a record whose envelope rises in more than a fifth of the bins, e.g.
+//!    a chirp response, is refused as [`DecayError::NotADecay`]; the few
+//!    rising bins a noisy tail may have are dropped and counted), and the
+//!    backbone must give `α > 0`.
 //! 5. **Check**: the fitted model's free decay from `(x, v) = (a₀, 0)` is
 //!    simulated (the time-domain RK4 of [`super::time_domain`]) and its
 //!    envelope, computed the same way, compared with the measured one.
@@ -65,7 +76,15 @@ pub enum DecayError {
     FitFailed { what: &'static str, bins: usize },
     #[error(transparent)]
     Limit(#[from] crate::limits::LimitError),
+    #[error("not a free decay: the envelope rises in {rising} of {bins} amplitude bins (a free decay only falls); give --t-start where the excitation stops")]
+    NotADecay { rising: usize, bins: usize },
+    #[error("not a free decay of an oscillator: the backbone fit gives omega^2 = alpha = {alpha} 1/s^2 at zero amplitude (must be > 0)")]
+    NoOscillator { alpha: f64 },
 }
+
+/// Range of both exponents (ρ of the backbone, η of the damping curve):
+/// from Coulomb friction (η = −1) to the steepest law the fit accepts.
+pub const EXPONENT_RANGE: (f64, f64) = (-1.0, 10.0);
 
 /// The analysed decay ends where the envelope falls below this fraction of
 /// its start (or 3× the noise floor): two decades of amplitude.
@@ -112,6 +131,10 @@ pub struct Fitted {
     pub upper: [f64; 3],
     /// RMS residual.
     pub rms: f64,
+    /// Parameters that ended at a bound that is not a result: an exponent
+    /// at the top of [`EXPONENT_RANGE`], a coefficient at 0 (then its
+    /// exponent has no effect and is named too).
+    pub at_bounds: Vec<&'static str>,
 }
 
 /// Result of [`analyse`].
@@ -132,8 +155,11 @@ pub struct DecayAnalysis {
     pub damping: Fitted,
     /// Envelope of the fitted model's simulated free decay over `start..end`.
     pub model_amplitude: Vec<f64>,
-    /// RMS of (model − measured envelope) / max measured envelope.
-    pub envelope_error: f64,
+    /// RMS of (model − measured envelope) / max measured envelope (`None`
+    /// when the model's decay could not be simulated).
+    pub envelope_error: Option<f64>,
+    /// Amplitude bins whose envelope rose (a noisy tail), dropped.
+    pub rising_bins: usize,
 }
 
 impl DecayAnalysis {
@@ -262,10 +288,12 @@ fn fit_power(
         return Err(DecayError::FitFailed { what, bins: n });
     }
     let fail = || DecayError::FitFailed { what, bins: n };
-    // grid over the exponent
+    let (p_lo, p_hi) = EXPONENT_RANGE;
+    // grid over the exponent, steps of 0.05
+    let steps = ((p_hi - p_lo) / 0.05).round() as usize;
     let mut best: Option<(f64, [f64; 3])> = None;
-    for i in 0..=200 {
-        let p = 0.05 * i as f64;
+    for i in 0..=steps {
+        let p = p_lo + 0.05 * i as f64;
         let j: Vec<f64> = s
             .iter()
             .flat_map(|&si| [1.0, PowerFit::basis(p, si)])
@@ -302,9 +330,9 @@ fn fit_power(
     let lo = [
         if nonneg_c0 { 0.0 } else { f64::NEG_INFINITY },
         if nonneg_c0 { 0.0 } else { f64::NEG_INFINITY },
-        0.0,
+        p_lo,
     ];
-    let hi = [f64::INFINITY, f64::INFINITY, 10.0];
+    let hi = [f64::INFINITY, f64::INFINITY, p_hi];
     let r = minimise(&problem, &start, &lo, &hi, &LmOptions::default()).map_err(|_| fail())?;
     let (res, j) = problem.residuals_and_jacobian(&r.u).ok_or_else(fail)?;
     let cost: f64 = res.iter().map(|v| v * v).sum();
@@ -321,9 +349,37 @@ fn fit_power(
         e[c] = 1.0;
         if let Some(col) = cholesky_solve(&scaled, &e, 3) {
             let se = (s2 * col[c] / (d[c] * d[c])).max(0.0).sqrt();
-            lower[c] = r.u[c] - t * se;
-            upper[c] = r.u[c] + t * se;
+            let v = r.u[c];
+            if nonneg_c0 && c < 2 {
+                // a coefficient >= 0: the interval of ln v (delta method,
+                // se(ln v) = se/v), so it stays inside the physical range
+                if v > 0.0 {
+                    let k = (t * se / v).exp();
+                    lower[c] = v / k;
+                    upper[c] = v * k;
+                } else {
+                    lower[c] = 0.0;
+                    upper[c] = t * se;
+                }
+            } else {
+                lower[c] = v - t * se;
+                upper[c] = v + t * se;
+            }
         }
+    }
+    let mut at_bounds = Vec::new();
+    if nonneg_c0 {
+        if r.u[0] <= 0.0 {
+            at_bounds.push(names[0]);
+        }
+        if r.u[1] <= 0.0 {
+            // no nonlinear term: its exponent has no effect either
+            at_bounds.push(names[1]);
+            at_bounds.push(names[2]);
+        }
+    }
+    if r.u[2] >= p_hi - 1e-6 * (p_hi - p_lo) && !at_bounds.contains(&names[2]) {
+        at_bounds.push(names[2]);
     }
     Ok(Fitted {
         names,
@@ -331,6 +387,7 @@ fn fit_power(
         lower,
         upper,
         rms: (cost / n as f64).sqrt(),
+        at_bounds,
     })
 }
 
@@ -495,9 +552,22 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
             samples: idx.len(),
         });
     }
+    // a free decay only falls: drop the few bins a noisy tail may raise,
+    // refuse a record whose envelope rises in more than a fifth of them
+    let bins = backbone.len();
+    let rising = backbone.iter().filter(|p| !(p.decay_rate > 0.0)).count();
+    if bins > 0 && rising * 5 > bins {
+        return Err(DecayError::NotADecay { rising, bins });
+    }
+    backbone.retain(|p| p.decay_rate > 0.0);
     let a: Vec<f64> = backbone.iter().map(|p| p.amplitude).collect();
     let w2: Vec<f64> = backbone.iter().map(|p| (TWO_PI * p.f_hz).powi(2)).collect();
     let stiffness = fit_power(&a, &w2, ["alpha", "beta", "rho"], false, "backbone")?;
+    if !(stiffness.values[0] > 0.0) {
+        return Err(DecayError::NoOscillator {
+            alpha: stiffness.values[0],
+        });
+    }
     let wa: Vec<f64> = backbone
         .iter()
         .map(|p| TWO_PI * p.f_hz * p.amplitude)
@@ -516,7 +586,8 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
         stiffness,
         damping,
         model_amplitude: Vec::new(),
-        envelope_error: f64::NAN,
+        envelope_error: None,
+        rising_bins: rising,
     };
     let model = res.model();
     if model.alpha > 0.0 {
@@ -553,7 +624,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
                 .sqrt()
                 / scale;
             res.model_amplitude = m;
-            res.envelope_error = err;
+            res.envelope_error = err.is_finite().then_some(err);
         }
     }
     Ok(res)

@@ -311,7 +311,9 @@ fn stepped_sine_same_file_twice_writes_nothing() {
 fn fit_out_and_plot_all_or_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let data = fit_data(dir.path());
-    let f = dir.path().join("f.toml");
+    // named .svg: a figure name the plot accepts, so that the run reaches the
+    // check of the same file given twice
+    let f = dir.path().join("f.svg");
     fails(
         &[
             "fit",

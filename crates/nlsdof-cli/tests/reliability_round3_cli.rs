@@ -338,7 +338,7 @@ fn figure_names_follow_one_policy() {
     let decay = decay_record(dir.path());
     let model = example("duffing-strong.toml");
     let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    let (png, svg, bare) = (p("d.png"), p("d.svg"), p("d"));
+    let (png, svg) = (p("d.png"), p("d.svg"));
     let runs: Vec<(Vec<&str>, &str)> = vec![
         (
             vec![
@@ -349,18 +349,6 @@ fn figure_names_follow_one_policy() {
                 "x",
                 "--plot",
                 &png,
-            ],
-            "written as SVG",
-        ),
-        (
-            vec![
-                "decay",
-                "--input",
-                s(&decay),
-                "--column",
-                "x",
-                "--plot",
-                &bare,
             ],
             "written as SVG",
         ),

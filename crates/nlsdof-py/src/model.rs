@@ -535,7 +535,8 @@ impl Model {
             }
         }
         let model = &self.inner;
-        let (x, v) = py
+        let cubic = record == RecordMethod::Rk4Cubic;
+        let (x, v, error) = py
             .detach(|| {
                 let mut x = Vec::with_capacity(u.len());
                 let mut v = Vec::with_capacity(u.len());
@@ -544,10 +545,33 @@ impl Model {
                     v.push(s.v);
                 };
                 let initial = State { x: x0, v: v0 };
-                simulate_record(model, &u, (gain, 0.0, fs), record, initial, &mut sink)
-                    .map(|_| (x, v))
+                simulate_record(model, &u, (gain, 0.0, fs), record, initial, &mut sink)?;
+                // the CLI's check of the default method (its first 4M samples)
+                let error = if cubic {
+                    let n = x.len().min(1 << 22);
+                    Some(nlsdof::simulation::rk4_cubic_error_estimate(
+                        model,
+                        &u,
+                        (gain, 0.0, fs),
+                        initial,
+                        &x[..n],
+                    )?)
+                } else {
+                    None
+                };
+                Ok::<_, nlsdof::simulation::SimulationError>((x, v, error))
             })
             .map_err(value_error)?;
+        if let Some(e) = error.filter(|&e| !(e <= nlsdof::simulation::INTEGRATION_WARN)) {
+            // as `nlsdof simulate` warns on stderr: a RuntimeWarning
+            let msg = format!(
+                "estimated integration error {e:.1e} of max |x| is above {:e}: sample the input faster (at least 20 samples per cycle of the highest frequency, more for very light damping), or try method=\"dopri\" if it already has many samples per cycle",
+                nlsdof::simulation::INTEGRATION_WARN
+            );
+            let warn = py.import("warnings")?;
+            let cat = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+            warn.call_method1("warn", (msg, cat, 2))?;
+        }
         Ok((PyArray1::from_vec(py, x), PyArray1::from_vec(py, v)))
     }
 

@@ -389,6 +389,26 @@ def test_sequences_are_accepted_wherever_a_pair_is():
         nlsdof.fit(path_cols, bounds={"rho": [1.0]})
 
 
+def test_simulate_warns_as_the_cli_does_when_the_input_is_sampled_too_coarsely(cli, tmp_path):
+    import warnings
+
+    m = nlsdof.Model.from_toml(DUFFING)
+    fs = 40.0  # 4 samples per cycle of the 10 Hz resonance
+    u = np.sin(2 * np.pi * 10.0 * np.arange(400) / fs)
+    with pytest.warns(RuntimeWarning, match="estimated integration error"):
+        m.simulate(u, fs)
+    path = tmp_path / "u.csv"
+    with open(path, "w") as out:
+        out.write("accel\n" + "\n".join(repr(float(v)) for v in u) + "\n")
+    err = subprocess.run([cli, "simulate", "--model", str(DUFFING), "--input", str(path), "--fs", str(fs),
+                          "--out", str(tmp_path / "x.csv")], capture_output=True, text=True).stderr
+    assert "estimated integration error" in err
+    # a well sampled input: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m.simulate(np.sin(2 * np.pi * 10.0 * np.arange(4000) / 1000.0), 1000.0)
+
+
 def test_type_errors_name_the_argument():
     with pytest.raises(TypeError, match="mass"):
         nlsdof.Model(mass="0.3", stiffness=1.0, damping=0.1)

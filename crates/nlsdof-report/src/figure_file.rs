@@ -1,9 +1,9 @@
 //! One policy for every figure option (`--plot`, `--waterfall`,
 //! `--landscape`): the file name's extension decides the format, and a
 //! name whose extension the option cannot write is refused before any work,
-//! in one line naming the option and what it can write. (Issue 30: `decay
-//! --plot d.png` wrote SVG into `d.png`; a name without extension was
-//! accepted as SVG.)
+//! in one line naming the option and what it can write (issue 30: `decay
+//! --plot d.png` wrote SVG into `d.png`). A name without an extension, and
+//! a device, get the option's first format.
 
 use crate::ReportError;
 use std::path::Path;
@@ -36,15 +36,29 @@ pub fn figure_format(
     path: &Path,
     supported: &[FigureFormat],
 ) -> Result<FigureFormat, ReportError> {
+    // a device (`/dev/null`, `/dev/stdout`) has no name to follow: the
+    // option's first format is written through to it
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if let (Some(f), Ok(m)) = (supported.first(), std::fs::metadata(path)) {
+            if m.file_type().is_char_device() {
+                return Ok(*f);
+            }
+        }
+    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    if let Some(f) = supported
-        .iter()
-        .find(|f| Some(f.extension()) == ext.as_deref())
-    {
-        return Ok(*f);
+    match (ext.as_deref(), supported.first()) {
+        (None, Some(first)) => return Ok(*first),
+        (Some(e), _) => {
+            if let Some(f) = supported.iter().find(|f| f.extension() == e) {
+                return Ok(*f);
+            }
+        }
+        _ => {}
     }
     let names: Vec<String> = supported
         .iter()
@@ -86,13 +100,16 @@ mod tests {
         assert_eq!(f("a.svg", &[Svg]).unwrap(), Svg);
         assert_eq!(f("dir.v2/A.SVG", &[Svg]).unwrap(), Svg);
         assert_eq!(f("l.png", &[Json, Svg, Png]).unwrap(), Png);
-        for bad in ["d.png", "d", "d.svg.txt", ".svg"] {
+        assert_eq!(f("d", &[Svg]).unwrap(), Svg);
+        for bad in ["d.png", "d.svg.txt", "x.PDF"] {
             let e = f(bad, &[Svg]).unwrap_err().to_string();
             assert!(
                 e.contains("written as SVG") && e.contains(".svg"),
                 "{bad}: {e}"
             );
         }
+        #[cfg(unix)]
+        assert_eq!(f("/dev/null", &[Svg]).unwrap(), Svg);
         let e = f("x.pdf", &[Json, Svg, Png]).unwrap_err().to_string();
         assert!(e.contains(".json, .svg or .png"), "{e}");
     }

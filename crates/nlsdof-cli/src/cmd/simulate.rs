@@ -3,10 +3,7 @@
 
 use crate::error::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use nlsdof::simulation::{
-    simulate, simulate_record, simulate_upsampled, Method, Options, RecordMethod, Sample, State,
-    Upsampling,
-};
+use nlsdof::simulation::{simulate, simulate_record, Method, Options, RecordMethod, Sample, State};
 use nlsdof::Model;
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid};
 use nlsdof_report::simulation as report;
@@ -19,7 +16,7 @@ use std::time::{Duration, Instant};
 const CHECK_SAMPLES: usize = 1 << 22;
 /// Estimated integration error (relative to max |x|) above which a warning
 /// is printed.
-const ERROR_WARN: f64 = 1e-3;
+const ERROR_WARN: f64 = nlsdof::simulation::INTEGRATION_WARN;
 
 /// Default RK4 on uniform sampling: the input upsampled this many times by
 /// cubics and integrated with two fine samples per step, h = 2/(4 fs) =
@@ -323,24 +320,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
     // samples) with RK4 at half the default step, cubic input.
     let error_estimate = match signal.grid {
         SignalGrid::Uniform { t0, fs } if check_n >= 2 => {
-            let (mut diff, mut scale) = (0.0f64, 0.0f64);
-            simulate_upsampled(
+            Some(nlsdof::simulation::rk4_cubic_error_estimate(
                 &nm,
                 &input.raw()[..check_n],
                 (gain, t0, fs),
-                &Upsampling {
-                    factor: 2 * CUBIC_FACTOR,
-                    initial,
-                },
-                &mut |s: Sample| {
-                    let (k, x) = (s.index, s.x);
-                    if let Some(&xm) = xs.get(k) {
-                        diff = diff.max((xm - x).abs());
-                        scale = scale.max(x.abs());
-                    }
-                },
-            )?;
-            Some(if scale > 0.0 { diff / scale } else { 0.0 })
+                initial,
+                &xs[..check_n.min(xs.len())],
+            )?)
         }
         _ => None,
     };

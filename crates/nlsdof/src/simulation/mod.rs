@@ -96,7 +96,8 @@ mod upsampled;
 
 pub use crate::error::SimulationError;
 pub use upsampled::{
-    simulate_record, simulate_upsampled, RecordMethod, Upsampling, DEFAULT_UPSAMPLING,
+    rk4_cubic_error_estimate, simulate_record, simulate_upsampled, RecordMethod, Upsampling,
+    DEFAULT_UPSAMPLING, INTEGRATION_WARN,
 };
 
 use crate::excitation::{Excitation, SampledInput};

@@ -150,6 +150,48 @@ pub fn simulate_record(
     simulate(model, &input, &opts, sink)
 }
 
+/// Estimated integration error of a [`RecordMethod::Rk4Cubic`] run, relative
+/// to `max |x|`: the same record (its first `x.len()` samples) integrated
+/// again at half the step (`h = 1/(4 f_s)`) on the same cubic input; the
+/// largest difference of the displacements `x` of the first run, over the
+/// largest `|x|`. It estimates the error of the step on that input
+/// reconstruction, not the error of reading the input as cubics (which both
+/// runs share). Used by `nlsdof simulate` and Python's `Model.simulate`,
+/// which warn above [`INTEGRATION_WARN`].
+pub fn rk4_cubic_error_estimate(
+    model: &(impl AsNormalised + ?Sized),
+    values: &[f64],
+    grid: (f64, f64, f64),
+    initial: State,
+    x: &[f64],
+) -> Result<f64, SimulationError> {
+    let n = x.len().min(values.len());
+    if n < 2 {
+        return Ok(0.0);
+    }
+    let (mut diff, mut scale) = (0.0f64, 0.0f64);
+    simulate_upsampled(
+        model,
+        &values[..n],
+        grid,
+        &Upsampling {
+            factor: 2 * DEFAULT_UPSAMPLING,
+            initial,
+        },
+        &mut |s: Sample| {
+            if let Some(&xm) = x.get(s.index) {
+                diff = diff.max((xm - s.x).abs());
+                scale = scale.max(s.x.abs());
+            }
+        },
+    )?;
+    Ok(if scale > 0.0 { diff / scale } else { 0.0 })
+}
+
+/// Estimated integration error (relative to `max |x|`) above which
+/// `nlsdof simulate` and Python's `Model.simulate` warn.
+pub const INTEGRATION_WARN: f64 = 1e-3;
+
 #[cfg(test)]
 mod record_tests {
     use super::*;

@@ -37,7 +37,9 @@ struct Inputs {
     decay: PathBuf,
 }
 
-fn inputs(dir: &Path) -> Inputs {
+/// A chirp (5 to 20 Hz, 20 s at 200 Hz) and the response of the Duffing
+/// example to it: `(chirp.csv, response.csv)`.
+fn chirp_response(dir: &Path) -> (PathBuf, PathBuf) {
     let model = example("duffing-strong.toml");
     let sine = dir.join("sine.csv");
     ok(&[
@@ -66,6 +68,12 @@ fn inputs(dir: &Path) -> Inputs {
         "--out",
         s(&response),
     ]);
+    (sine, response)
+}
+
+fn inputs(dir: &Path) -> Inputs {
+    let model = example("duffing-strong.toml");
+    let (sine, response) = chirp_response(dir);
     let frf = dir.join("frf.csv");
     ok(&[
         "frf-estimate",
@@ -689,34 +697,7 @@ fn multi_harmonic_coulomb_covers_the_example_band_and_messages_have_no_nan() {
 #[test]
 fn decay_of_a_forced_response_says_so_first() {
     let dir = tempfile::tempdir().unwrap();
-    let model = example("duffing-strong.toml");
-    let chirp = dir.path().join("c.csv");
-    ok(&[
-        "signal",
-        "chirp",
-        "--amplitude",
-        "1",
-        "--f0",
-        "5",
-        "--f1",
-        "20",
-        "--duration",
-        "20",
-        "--fs",
-        "200",
-        "--out",
-        s(&chirp),
-    ]);
-    let resp = dir.path().join("r.csv");
-    ok(&[
-        "simulate",
-        "--model",
-        s(&model),
-        "--input",
-        s(&chirp),
-        "--out",
-        s(&resp),
-    ]);
+    let (_, resp) = chirp_response(dir.path());
     let text = ok(&["decay", "--input", s(&resp), "--column", "x"]);
     assert!(
         text.starts_with("WARNING: the fitted model's free decay misses"),

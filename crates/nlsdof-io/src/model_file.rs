@@ -167,6 +167,29 @@ fn one() -> f64 {
     1.0
 }
 
+impl SignalMap {
+    /// The gain finite and non-zero, the offsets finite: `Err` names the key
+    /// (`signal.input_gain`, ...) and says what is wrong.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
+        for (name, v) in [
+            ("signal.input_gain", self.input_gain),
+            ("signal.input_offset", self.input_offset),
+            ("signal.output_offset", self.output_offset),
+        ] {
+            if !v.is_finite() {
+                return Err((name, format!("{name} = {v} is not a finite number")));
+            }
+        }
+        if self.input_gain == 0.0 {
+            return Err((
+                "signal.input_gain",
+                "signal.input_gain = 0 would disconnect the input".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SignalMap {
     fn default() -> Self {
         Self {
@@ -247,24 +270,10 @@ pub fn parse_document(text: &str, path: &Path) -> Result<ModelDocument, IoError>
         source,
     })?;
     if let Some(s) = &file.signal {
-        for (name, v) in [
-            ("signal.input_gain", s.input_gain),
-            ("signal.input_offset", s.input_offset),
-            ("signal.output_offset", s.output_offset),
-        ] {
-            if !v.is_finite() {
-                return Err(IoError::Invalid {
-                    path: path.to_path_buf(),
-                    source: nlsdof::ParameterError::NotFinite { name, value: v },
-                });
-            }
-        }
-        if s.input_gain == 0.0 {
-            return Err(IoError::Parse {
-                path: path.to_path_buf(),
-                message: "signal.input_gain = 0 would disconnect the input".into(),
-            });
-        }
+        s.check().map_err(|(_, message)| IoError::Parse {
+            path: path.to_path_buf(),
+            message,
+        })?;
     }
     if let Some(c) = file.provenance.as_ref().and_then(|p| p.cost) {
         if !(c.is_finite() && c >= 0.0) {

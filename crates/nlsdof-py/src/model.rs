@@ -83,18 +83,6 @@ impl Model {
     }
 }
 
-/// A `(coefficient, exponent)` pair from any sequence of two numbers.
-fn pair(v: Option<Vec<f64>>, name: &str) -> PyResult<Option<(f64, f64)>> {
-    match v {
-        None => Ok(None),
-        Some(v) if v.len() == 2 => Ok(Some((v[0], v[1]))),
-        Some(v) => Err(value_error(format!(
-            "{name} must be a pair (coefficient, exponent), got {} values",
-            v.len()
-        ))),
-    }
-}
-
 /// The `[signal]` table from a dict.
 fn signal_from(d: &Bound<'_, pyo3::types::PyDict>) -> PyResult<SignalMap> {
     let mut s = SignalMap::default();
@@ -114,20 +102,8 @@ fn signal_from(d: &Bound<'_, pyo3::types::PyDict>) -> PyResult<SignalMap> {
             }
         }
     }
-    for (name, v) in [
-        ("input_gain", s.input_gain),
-        ("input_offset", s.input_offset),
-        ("output_offset", s.output_offset),
-    ] {
-        if !v.is_finite() {
-            return Err(value_error(format!("signal {name} = {v} is not finite")));
-        }
-    }
-    if s.input_gain == 0.0 {
-        return Err(value_error(
-            "signal input_gain = 0 would disconnect the input",
-        ));
-    }
+    // the model file's rule, in its words
+    s.check().map_err(|(_, m)| value_error(m))?;
     Ok(s)
 }
 
@@ -144,10 +120,11 @@ impl Model {
         signal: Option<&Bound<'_, pyo3::types::PyDict>>,
     ) -> PyResult<Self> {
         let mut m = nlsdof::Model::linear(mass, stiffness, damping).map_err(value_error)?;
-        if let Some((k_r, rho)) = pair(nonlinear_stiffness, "nonlinear_stiffness")? {
+        if let Some((k_r, rho)) = crate::convert::pair(nonlinear_stiffness, "nonlinear_stiffness")?
+        {
             m = m.with_stiffness(k_r, rho).map_err(value_error)?;
         }
-        if let Some((c_e, eta)) = pair(nonlinear_damping, "nonlinear_damping")? {
+        if let Some((c_e, eta)) = crate::convert::pair(nonlinear_damping, "nonlinear_damping")? {
             m = m.with_damping(c_e, eta).map_err(value_error)?;
         }
         Ok(Self {

@@ -19,14 +19,7 @@ fn duffing_decay(n: usize, fs: f64) -> (NormalisedModel, Vec<f64>) {
         kappa: 0.0,
         eta: 0.0,
     };
-    let tm = TimeModel {
-        model: m,
-        gain: 0.0,
-        input_offset: 0.0,
-        output_offset: 0.0,
-    };
-    let x = simulate_output(&tm, &vec![0.0; n], fs, State { x: 1.0, v: 0.0 }).unwrap();
-    (m, x)
+    (m, free_decay(m, 1.0, n, fs))
 }
 
 #[test]

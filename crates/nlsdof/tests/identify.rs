@@ -25,6 +25,19 @@ fn duffing_quadratic() -> Parameters {
     Parameters::from([wn * wn, 2.0 * 0.01 * wn, 4.0e6, 2.0, 0.05, 1.0, 1.0])
 }
 
+/// The Duffing + quadratic damping set: 3 levels, up and down
+/// sweeps with jumps, 120 steps over 8–14 Hz, noise free.
+fn duffing_quadratic_data(t: &Parameters) -> Dataset {
+    data(
+        t,
+        &[0.5, 1.0, 2.0],
+        (8.0, 14.0),
+        120,
+        &[SweepDirection::Up, SweepDirection::Down],
+        None,
+    )
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     ((a - b) / b).abs()
 }
@@ -244,14 +257,7 @@ fn landscape_minimum_is_at_the_truth_and_profile_covers_it() {
 #[test]
 fn default_fit_recovers_duffing_quadratic_with_jumps() {
     let t = duffing_quadratic();
-    let d = data(
-        &t,
-        &[0.5, 1.0, 2.0],
-        (8.0, 14.0),
-        120,
-        &[SweepDirection::Up, SweepDirection::Down],
-        None,
-    );
+    let d = duffing_quadratic_data(&t);
     let r = identify(&d, &FitPlan::new(ModelKind::DuffingQuadratic), &|_| {}).unwrap();
     assert!(!r.fit.levels.is_empty());
     for j in [ALPHA, DELTA, BETA, KAPPA] {
@@ -488,14 +494,7 @@ fn blind_h016() -> (Dataset, Parameters) {
 #[test]
 fn sweeps_at_the_data_reproduce_the_fit_bit_for_bit() {
     let t = duffing_quadratic();
-    let d = data(
-        &t,
-        &[0.5, 1.0, 2.0],
-        (8.0, 14.0),
-        120,
-        &[SweepDirection::Up, SweepDirection::Down],
-        None,
-    );
+    let d = duffing_quadratic_data(&t);
     let mut plan = FitPlan::new(ModelKind::DuffingQuadratic);
     // a gain other than 1, so that its product with the level is exercised
     plan.gain = GainChoice::Fixed(1.7);

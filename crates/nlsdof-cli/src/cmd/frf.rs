@@ -3,7 +3,8 @@
 //! JSON or CSV, optionally plotted to SVG.
 
 use super::roots::{
-    check_frequency, check_gamma, conventions_help, gain_note, load_steady_model, FormulationArg,
+    check_frequency, check_gamma, conventions_help, load_steady_model, with_gain_note,
+    FormulationArg,
 };
 use crate::error::CliError;
 use nlsdof::{level_responses, SweepDirection};
@@ -339,13 +340,7 @@ fn emit(
         report::sweep_csv(levels)
     } else {
         let text = nlsdof_report::compact_numbers(&report::sweep_text(request, model, levels));
-        match gain_note(gain) {
-            Some(note) => {
-                let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
-                format!("{first}\n{note}\n{rest}")
-            }
-            None => text,
-        }
+        with_gain_note(text, gain)
     };
 
     if let Some(path) = &args.plot {

@@ -103,14 +103,10 @@ pub fn run(
     } else if args.csv {
         report::sweep_csv(&request, &levels)
     } else {
-        let text = report::sweep_text(&request, model, &levels, f_min, f_max);
-        match super::roots::gain_note(gain) {
-            Some(note) => {
-                let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
-                format!("{first}\n{note}\n{rest}")
-            }
-            None => text,
-        }
+        super::roots::with_gain_note(
+            report::sweep_text(&request, model, &levels, f_min, f_max),
+            gain,
+        )
     };
     if let Some(path) = args.plot {
         let title = format!(

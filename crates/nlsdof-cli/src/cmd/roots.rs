@@ -141,6 +141,17 @@ pub fn gain_note(gain: f64) -> Option<String> {
     })
 }
 
+/// A text report with [`gain_note`] as its second line (after the model line).
+pub fn with_gain_note(text: String, gain: f64) -> String {
+    match gain_note(gain) {
+        Some(note) => {
+            let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
+            format!("{first}\n{note}\n{rest}")
+        }
+        None => text,
+    }
+}
+
 /// An input level: finite and > 0.
 pub fn check_gamma(gamma: f64) -> Result<f64, CliError> {
     if gamma.is_finite() && gamma > 0.0 {
@@ -224,13 +235,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         println!("{v}");
     } else {
         let text = report::roots_text(&name, &model, f_hz, gamma, formulation, &set);
-        match gain_note(gain) {
-            Some(note) => {
-                let (first, rest) = text.split_once('\n').unwrap_or((&text, ""));
-                print!("{first}\n{note}\n{rest}");
-            }
-            None => print!("{text}"),
-        }
+        print!("{}", with_gain_note(text, gain));
     }
     Ok(())
 }

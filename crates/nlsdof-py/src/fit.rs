@@ -194,6 +194,14 @@ impl SteppedSineData {
     }
 }
 
+/// The pickled state of a [`FitResult`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct FitState {
+    id: Identification,
+    mass: Option<f64>,
+    source: Option<String>,
+}
+
 /// The pickled state of each curve: level, gamma, direction, omegas (rad/s),
 /// amplitudes, phases (rad), weights.
 type CurveStates = Vec<(
@@ -712,6 +720,55 @@ impl FitResult {
     /// The text report of `nlsdof fit`.
     fn report(&self) -> PyResult<String> {
         nlsdof_report::fit::identification_report(&self.id, self.mass).map_err(value_error)
+    }
+    /// Pickling and `copy.deepcopy`: the whole identification (every stage,
+    /// so `to_dict()`, `report()` and `profile()` work on the copy as on the
+    /// original) as CBOR bytes, with the mass and the data's source.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, pyo3::types::PyBytes>,))> {
+        let me = slf.get();
+        let state = FitState {
+            id: me.id.clone(),
+            mass: me.mass,
+            source: me.source.clone(),
+        };
+        let mut bytes = Vec::new();
+        ciborium::into_writer(&state, &mut bytes).map_err(value_error)?;
+        Ok((
+            slf.get_type().getattr("_from_state")?,
+            (pyo3::types::PyBytes::new(slf.py(), &bytes),),
+        ))
+    }
+    /// Rebuilds a pickled result (see `__reduce__`).
+    #[staticmethod]
+    fn _from_state(state: &[u8]) -> PyResult<Self> {
+        let s: FitState = ciborium::from_reader(state)
+            .map_err(|e| value_error(format!("not a pickled FitResult: {e}")))?;
+        let physical =
+            s.id.fit
+                .model()
+                .to_physical(s.mass.unwrap_or(1.0))
+                .map_err(value_error)?;
+        Ok(Self {
+            id: s.id,
+            mass: s.mass,
+            physical,
+            source: s.source,
+        })
+    }
+    /// Equal when the two identifications are the same bit for bit (data,
+    /// every stage, result; NaN cells included) with the same mass.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        let Ok(o) = other.cast::<FitResult>() else {
+            return Ok(false);
+        };
+        let bytes = |r: &FitResult| -> PyResult<Vec<u8>> {
+            let mut b = Vec::new();
+            ciborium::into_writer(&(&r.id, r.mass), &mut b).map_err(value_error)?;
+            Ok(b)
+        };
+        Ok(bytes(self)? == bytes(o.get())?)
     }
     /// The model, every parameter present with its unit (and 95 % interval
     /// when valid), the cost and the verdict.

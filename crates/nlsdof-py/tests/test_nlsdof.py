@@ -376,6 +376,17 @@ def test_data_and_results_behave_as_values(tmp_path):
     assert "converged=True" in r
     # the model of a fit is a value like any other
     assert pickle.loads(pickle.dumps(res.model)) == res.model
+    # and the fit result itself: every stage travels, so the copy answers
+    # everything the original does (joblib and multiprocessing pickle results)
+    for again in (pickle.loads(pickle.dumps(res)), copy.deepcopy(res)):
+        assert again == res
+        assert again.to_dict() == res.to_dict() and again.report() == res.report()
+        assert again.to_toml() == res.to_toml() and again.model == res.model
+    gen = nlsdof.fit(d, model="duffing-generalised")
+    assert pickle.loads(pickle.dumps(gen)).profile("eta") == gen.profile("eta")
+    assert res != nlsdof.fit(d, model="duffing-quadratic", mass=0.3)
+    with pytest.raises(ValueError, match="not a pickled FitResult"):
+        nlsdof.FitResult._from_state(b"garbage")
 
 
 def test_sequences_are_accepted_wherever_a_pair_is():

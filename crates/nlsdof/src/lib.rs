@@ -230,6 +230,7 @@ pub mod error;
 pub mod excitation;
 pub mod harmonic_balance;
 pub mod identification;
+pub mod interned;
 pub mod limits;
 pub mod model;
 pub mod multi_harmonic;

@@ -68,7 +68,7 @@ pub enum Formulation {
 }
 
 /// Direction of a stepped-sine sweep.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum SweepDirection {
     Up,
     Down,

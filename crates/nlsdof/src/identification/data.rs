@@ -25,7 +25,7 @@ pub struct Record {
 /// One sweep at one level: frequencies strictly increasing, whatever the
 /// sweep direction (the direction tells the branch follower which way the
 /// shaker went).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Curve {
     pub level: String,
     pub gamma: f64,
@@ -38,7 +38,7 @@ pub struct Curve {
 
 /// A validated data set: at least one level, each curve at least three
 /// distinct frequencies.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Dataset {
     pub curves: Vec<Curve>,
 }

@@ -70,7 +70,7 @@ use crate::power_law::g_unchecked;
 
 /// How the measured phase relates to the model's displacement phase lag φ:
 /// `ψ = sign · φ + offset + Ω · delay` (rad, s).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PhaseConvention {
     /// `+1`: the file's phase is a lag (grows through resonance); `−1`: a lead.
     pub sign: f64,
@@ -148,7 +148,7 @@ pub struct Terms {
 }
 
 /// Result of an equation-error fit at fixed exponents.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EquationErrorFit {
     /// θ = (α, δ, β, ρ, κ, η, gain), natural units (β signed).
     pub theta: Parameters,
@@ -161,6 +161,7 @@ pub struct EquationErrorFit {
     /// The convention used or detected (None without phase).
     pub phase: Option<PhaseConvention>,
     /// Names of parameters the data cannot separate (empty if well posed).
+    #[serde(deserialize_with = "crate::interned::names")]
     pub unidentifiable: Vec<&'static str>,
 }
 

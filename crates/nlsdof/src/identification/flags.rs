@@ -32,10 +32,12 @@ use super::uncertainty::Uncertainty;
 pub const RIDGE_CORRELATION: f64 = 0.999;
 
 /// Two parameters the data cannot separate to first order.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ridge {
-    pub first: &'static str,
-    pub second: &'static str,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub first: crate::interned::Name,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub second: crate::interned::Name,
     /// Correlation of the two estimates.
     pub correlation: f64,
 }
@@ -83,9 +85,10 @@ pub fn ridges(u: &Uncertainty) -> Vec<Ridge> {
 }
 
 /// A 95 % interval that reaches values the parameter cannot take.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BoundCrossing {
-    pub name: &'static str,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub name: crate::interned::Name,
     /// The bound crossed (0 for all of them).
     pub bound: f64,
 }
@@ -114,12 +117,14 @@ pub fn crossings(u: &Uncertainty) -> Vec<BoundCrossing> {
 }
 
 /// A parameter at a bound that is a result of the fit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NaturalBound {
-    pub name: &'static str,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub name: crate::interned::Name,
     pub value: f64,
     /// What the value means, e.g. "Coulomb friction".
-    pub meaning: &'static str,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub meaning: crate::interned::Name,
 }
 
 impl NaturalBound {
@@ -143,12 +148,14 @@ pub fn natural_meaning(j: usize, lower: bool, value: f64) -> Option<&'static str
 /// A power-law term the data do not need: its coefficient went to its
 /// lower bound, or its exponent to a near copy of the linear term, and
 /// removing it did not change the misfit significantly.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Inactive {
     /// The exponent held (`"eta"`, `"rho"`).
-    pub exponent: &'static str,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub exponent: crate::interned::Name,
     /// The coefficient that went to zero (`"kappa"`, `"beta"`).
-    pub coefficient: &'static str,
+    #[serde(deserialize_with = "crate::interned::name")]
+    pub coefficient: crate::interned::Name,
     /// The exponent's value where it was held.
     pub held_at: f64,
 }
@@ -172,7 +179,7 @@ mod tests {
     use super::*;
 
     fn unc(
-        names: Vec<&'static str>,
+        #[serde(deserialize_with = "crate::interned::names")] names: Vec<&'static str>,
         values: Vec<f64>,
         lower: Vec<f64>,
         upper: Vec<f64>,

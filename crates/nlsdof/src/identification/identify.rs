@@ -473,7 +473,7 @@ pub enum IdentifyError {
 }
 
 /// The gain decision of [`GainChoice::Auto`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GainTest {
     /// Equation-error gain estimate (stage 3).
     pub gain: f64,
@@ -486,7 +486,7 @@ pub struct GainTest {
 }
 
 /// The output-error comparison of the held and the free gain.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OutputErrorGainTest {
     /// Objective with the gain held at 1, and free.
     pub held: f64,
@@ -502,7 +502,7 @@ pub struct OutputErrorGainTest {
 }
 
 /// One refined candidate.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Candidate {
     pub rho: f64,
     pub eta: f64,
@@ -527,7 +527,7 @@ pub enum IdentifyProgress {
 }
 
 /// What the fit says about one measured curve.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CurveReport {
     pub level: String,
     pub gamma: f64,
@@ -555,7 +555,7 @@ pub struct CurveReport {
 }
 
 /// The self-check of a fit against the noise of its data (stage 8).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adequacy {
     /// The model fits every curve to within the noise thresholds.
     pub adequate: bool,
@@ -582,7 +582,7 @@ pub struct Adequacy {
 }
 
 /// The outcome of [`identify`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Identification {
     /// The final output-error fit.
     pub fit: FitResult,

@@ -70,7 +70,7 @@ pub enum LandscapePhase {
 }
 
 /// The profiled cost over the exponent grid.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Landscape {
     /// ρ values (columns) and η values (rows).
     pub rho: Vec<f64>,
@@ -87,7 +87,7 @@ pub struct Landscape {
 }
 
 /// A profile-likelihood interval (`None` bound = open at the grid edge).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ProfileInterval {
     pub lower: Option<f64>,
     pub upper: Option<f64>,

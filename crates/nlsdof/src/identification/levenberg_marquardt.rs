@@ -72,7 +72,7 @@ impl Default for LmOptions {
 pub const PROGRESS_WINDOW: usize = 5;
 
 /// Why the iteration stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Termination {
     /// The cost reached `cost_floor` (exact fit).
     ZeroResidual,

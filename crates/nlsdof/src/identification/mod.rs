@@ -89,7 +89,7 @@ impl Default for FitOptions {
 }
 
 /// One distinct local minimum of the global search.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Minimum {
     pub theta: Parameters,
     pub cost: f64,
@@ -100,7 +100,7 @@ pub struct Minimum {
 }
 
 /// Per-level residual summary.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LevelStats {
     pub level: String,
     pub gamma: f64,
@@ -113,7 +113,7 @@ pub struct LevelStats {
 }
 
 /// Result of [`fit`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FitResult {
     pub kind: ModelKind,
     pub status: [Status; N_PARAMS],
@@ -137,9 +137,11 @@ pub struct FitResult {
     /// stalled).
     pub converged: bool,
     /// Free parameters that ended at (within 1e-6 of the box width of) a bound.
+    #[serde(deserialize_with = "crate::interned::names")]
     pub at_bounds: Vec<&'static str>,
     /// Free parameters along a (numerically) null direction of the
     /// Jacobian at the optimum: the data cannot separate them.
+    #[serde(deserialize_with = "crate::interned::names")]
     pub unidentifiable: Vec<&'static str>,
     /// Sum of the squared phase residuals at the optimum (`None` when phase
     /// was not fitted).

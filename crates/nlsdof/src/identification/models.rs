@@ -22,7 +22,7 @@ pub fn param_index(name: &str) -> Option<usize> {
 }
 
 /// A model of the identification family.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum ModelKind {
     /// `x'' + δx' + αx = γ`.
     Linear,

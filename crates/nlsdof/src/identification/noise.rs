@@ -267,7 +267,7 @@ pub fn z2_per_curve(
 
 /// Per-curve adequacy of a fit: mean `z²` of its residuals against the
 /// local noise (module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CurveNoise {
     /// Mean of `(r_i/σ̂_i)²` over the curve's residuals (amplitude and
     /// phase, with its penalty terms).

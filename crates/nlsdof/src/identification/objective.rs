@@ -57,7 +57,7 @@ use crate::power_law::g_unchecked;
 use crate::special::g_derivative;
 
 /// Role of one parameter in a fit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Status {
     /// Not part of the model (value 0).
     Absent,
@@ -68,7 +68,7 @@ pub enum Status {
 }
 
 /// Amplitude and frequency at which the nonlinear coefficients are scaled.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Scales {
     /// A_ref, m.
     pub a_ref: f64,
@@ -79,7 +79,7 @@ pub struct Scales {
 /// The model structure of one fit: status of each parameter, box bounds
 /// of the optimisation variables (in natural units, see the module docs:
 /// for β and κ the bounds apply to β_ref and κ_ref), and the start.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FitSpec {
     pub kind: ModelKind,
     pub status: [Status; N_PARAMS],
@@ -111,7 +111,7 @@ pub struct FitSpec {
 
 /// Which steady state of the model a measured point `(Ω, a)` is compared
 /// with in the output error.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum ResponseBranch {
     /// Eq 31 as published: the state the model's own sweep reaches at `Ω`
     /// (continuation in the measured direction, jumps at the model's folds).
@@ -138,7 +138,7 @@ pub enum ResponseBranch {
 }
 
 /// Sign of the nonlinear stiffness coefficient β in a fit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Sign {
     /// β > 0: the resonance bends to higher frequencies.
     #[default]

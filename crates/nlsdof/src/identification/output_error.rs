@@ -80,7 +80,9 @@ use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
 pub const BARRIER: f64 = 0.1;
 
 /// How a measured jump is read (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize, serde::Deserialize,
+)]
 pub enum JumpReading {
     /// A perfect sweep: it leaves its branch at the fold, within a step.
     #[default]

@@ -30,7 +30,7 @@ use std::ops::{Index, IndexMut};
 ///
 /// Also indexable by position (`theta[RHO]`, with the index constants of
 /// [`super::models`]) for the optimisers, which work on vectors.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Parameters {
     /// α = k/m, 1/s².
     pub alpha: f64,

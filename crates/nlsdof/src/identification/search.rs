@@ -29,7 +29,7 @@ use super::{integer_search, Dataset, FitOptions, FitResult, FitSpec, IntegerCand
 use super::{Sign, Status, Termination};
 
 /// One sign's outcome: the cost of its fit, or the fit's error message.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SignTrial {
     pub sign: Sign,
     pub cost: Result<f64, String>,

@@ -17,9 +17,10 @@ use super::models::{N_PARAMS, PARAM_NAMES};
 use super::parameters::Parameters;
 
 /// Standard errors, 95 % intervals and correlations of the free parameters.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Uncertainty {
     /// Names of the free parameters, in θ order.
+    #[serde(deserialize_with = "crate::interned::names")]
     pub names: Vec<&'static str>,
     pub values: Vec<f64>,
     pub std_errors: Vec<f64>,

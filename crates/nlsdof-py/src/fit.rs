@@ -200,6 +200,7 @@ struct FitState {
     id: Identification,
     mass: Option<f64>,
     source: Option<String>,
+    integer: bool,
 }
 
 /// The pickled state of each curve: level, gamma, direction, omegas (rad/s),
@@ -390,9 +391,12 @@ fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<(Dataset, Option<String>)> {
 /// branch-free equation-error estimate), "hardening", "softening", or
 /// "auto" (fit both signs, keep the lower objective); `phase`: "auto", "ignore" or
 /// (lag|lead, offset_deg, delay_s); `weighting`: "absolute" (Eq 31) or
-/// "relative"; `jump_weight`: None (auto), 0 (off) or lambda.
+/// "relative"; `jump_weight`: None (auto), 0 (off) or lambda;
+/// `jump_reading`: "auto", "exact" or "censored" (`--jump-reading`);
+/// `integer`: also fit the integer exponent pairs around the optimum
+/// (`--integer`).
 #[pyfunction]
-#[pyo3(signature = (data, model="generalised", *, mass=None, fix=None, free=None, bounds=None, sign="data", phase=None, phase_weight=None, weighting="absolute", jump_weight=None, grid=None, refine=None, starts=1, seed=1))]
+#[pyo3(signature = (data, model="generalised", *, mass=None, fix=None, free=None, bounds=None, sign="data", phase=None, phase_weight=None, weighting="absolute", jump_weight=None, jump_reading="auto", integer=false, grid=None, refine=None, starts=1, seed=1))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -407,6 +411,8 @@ pub fn fit(
     phase_weight: Option<f64>,
     weighting: &str,
     jump_weight: Option<f64>,
+    jump_reading: &str,
+    integer: bool,
     grid: Option<Vec<usize>>,
     refine: Option<usize>,
     starts: usize,
@@ -471,6 +477,27 @@ pub fn fit(
         }
     };
     plan.phase = phase_choice(phase)?;
+    // as the CLI's --jump-reading and --integer
+    plan.reading = match jump_reading.to_ascii_lowercase().as_str() {
+        "auto" => nlsdof::identification::ReadingChoice::Auto,
+        "exact" => nlsdof::identification::ReadingChoice::Exact,
+        "censored" => nlsdof::identification::ReadingChoice::Censored,
+        _ => return Err(value_error(format!(
+            "jump_reading {jump_reading:?} is not allowed: use \"auto\", \"exact\" or \"censored\""
+        ))),
+    };
+    if integer {
+        use nlsdof::identification::models::Term;
+        if kind.stiffness() != Term::FreeExponent
+            && kind.damping() != Term::FreeExponent
+            && !plan.free.iter().any(|n| n == "rho" || n == "eta")
+        {
+            return Err(value_error(format!(
+                "integer: the {kind} model has no free exponent"
+            )));
+        }
+        plan.exponents = nlsdof::identification::identify::ExponentChoice::Integer;
+    }
     if let Some(w) = phase_weight {
         if !(w.is_finite() && w > 0.0) {
             return Err(value_error(format!(
@@ -525,6 +552,7 @@ pub fn fit(
         mass,
         physical,
         source,
+        integer,
     })
 }
 
@@ -579,6 +607,8 @@ pub struct FitResult {
     physical: nlsdof::Model,
     /// The data's source, as the model file's provenance names it.
     source: Option<String>,
+    /// Fitted with `integer=True` (the documents add the integer nodes).
+    integer: bool,
 }
 
 #[pymethods]
@@ -676,8 +706,11 @@ impl FitResult {
     }
     /// The document of `nlsdof fit --json` (same keys and numbers).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let doc = nlsdof_report::fit::identification_document(&self.id, self.mass)
+        let mut doc = nlsdof_report::fit::identification_document(&self.id, self.mass)
             .map_err(value_error)?;
+        if self.integer {
+            doc["integer_pairs"] = nlsdof_report::fit::integer_nodes_json(&self.id);
+        }
         to_py(py, &doc)
     }
     /// The model file of `nlsdof fit --out` (TOML, with its header).
@@ -719,7 +752,12 @@ impl FitResult {
     }
     /// The text report of `nlsdof fit`.
     fn report(&self) -> PyResult<String> {
-        nlsdof_report::fit::identification_report(&self.id, self.mass).map_err(value_error)
+        let mut text =
+            nlsdof_report::fit::identification_report(&self.id, self.mass).map_err(value_error)?;
+        if self.integer {
+            text.push_str(&nlsdof_report::fit::integer_nodes_text(&self.id));
+        }
+        Ok(text)
     }
     /// Pickling and `copy.deepcopy`: the whole identification (every stage,
     /// so `to_dict()`, `report()` and `profile()` work on the copy as on the
@@ -732,6 +770,7 @@ impl FitResult {
             id: me.id.clone(),
             mass: me.mass,
             source: me.source.clone(),
+            integer: me.integer,
         };
         let mut bytes = Vec::new();
         ciborium::into_writer(&state, &mut bytes).map_err(value_error)?;
@@ -755,6 +794,7 @@ impl FitResult {
             mass: s.mass,
             physical,
             source: s.source,
+            integer: s.integer,
         })
     }
     /// Equal when the two identifications are the same bit for bit (data,

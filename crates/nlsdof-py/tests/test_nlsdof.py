@@ -347,6 +347,8 @@ def test_fit_equals_cli_bit_for_bit(cli, tmp_path):
         ({"sign": "hardening", "starts": 3}, ["--sign", "hardening", "--starts", "3"]),
         ({"free": ["gain"], "weighting": "relative"}, ["--free", "gain", "--weighting", "relative"]),
         ({"grid": (9, 7), "refine": 2}, ["--grid", "9x7", "--refine", "2"]),
+        ({"jump_reading": "censored"}, ["--jump-reading", "censored"]),
+        ({"integer": True, "jump_weight": 0.5}, ["--integer", "--jump-weight", "0.5"]),
     ],
 )
 def test_fit_options_mean_the_same_in_python_and_on_the_cli(cli, tmp_path, kwargs, flags):

@@ -179,7 +179,7 @@ mod tests {
     use super::*;
 
     fn unc(
-        #[serde(deserialize_with = "crate::interned::names")] names: Vec<&'static str>,
+        names: Vec<&'static str>,
         values: Vec<f64>,
         lower: Vec<f64>,
         upper: Vec<f64>,

@@ -120,6 +120,11 @@ impl SteppedSineData {
         d.set_item("weight", self.weight(py))?;
         Ok(d)
     }
+    /// The columns as a pandas DataFrame (long format, one row per point;
+    /// needs pandas).
+    fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        dataframe(py, self.to_dict(py)?)
+    }
     /// Pickling and `copy.deepcopy`: every curve exactly as held (angular
     /// frequencies and phases in rad, no conversion).
     fn __reduce__<'py>(
@@ -192,6 +197,16 @@ impl SteppedSineData {
             levels.join(", ")
         )
     }
+}
+
+/// A pandas DataFrame of `columns`; a clear error when pandas is missing.
+fn dataframe<'py>(py: Python<'py>, columns: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyAny>> {
+    let pd = py.import("pandas").map_err(|_| {
+        pyo3::exceptions::PyImportError::new_err(
+            "to_dataframe() needs pandas (pip install pandas); to_dict()/fitted_curves() give the same columns without it",
+        )
+    })?;
+    pd.getattr("DataFrame")?.call1((columns,))
 }
 
 /// The pickled state of a [`FitResult`].
@@ -482,9 +497,11 @@ pub fn fit(
         "auto" => nlsdof::identification::ReadingChoice::Auto,
         "exact" => nlsdof::identification::ReadingChoice::Exact,
         "censored" => nlsdof::identification::ReadingChoice::Censored,
-        _ => return Err(value_error(format!(
+        _ => {
+            return Err(value_error(format!(
             "jump_reading {jump_reading:?} is not allowed: use \"auto\", \"exact\" or \"censored\""
-        ))),
+        )))
+        }
     };
     if integer {
         use nlsdof::identification::models::Term;
@@ -758,6 +775,49 @@ impl FitResult {
             text.push_str(&nlsdof_report::fit::integer_nodes_text(&self.id));
         }
         Ok(text)
+    }
+    /// Every measured point with the fit's model there, as columns (a dict of
+    /// lists and numpy arrays): `level`, `gamma` (m/s^2), `f_hz`, `amplitude`
+    /// (m, measured), `sweep`, `model_amplitude` (m) and `model_phase_deg`
+    /// (deg), plus `phase_deg` when the data have phases — the fit's own model
+    /// curves (Eq 31; the table of `nlsdof fit --predict`, same numbers).
+    fn fitted_curves<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let pts = nlsdof_report::fit::predicted_points(&self.id).map_err(value_error)?;
+        let d = PyDict::new(py);
+        let col = |f: &dyn Fn(&nlsdof_report::fit::PredictedPoint) -> f64| {
+            PyArray1::from_vec(py, pts.iter().map(f).collect())
+        };
+        d.set_item("level", pts.iter().map(|p| p.level).collect::<Vec<_>>())?;
+        d.set_item("gamma", col(&|p| p.gamma))?;
+        d.set_item("f_hz", col(&|p| p.f_hz))?;
+        d.set_item("amplitude", col(&|p| p.amplitude))?;
+        d.set_item("sweep", pts.iter().map(|p| p.sweep).collect::<Vec<_>>())?;
+        d.set_item("model_amplitude", col(&|p| p.model_amplitude))?;
+        d.set_item("model_phase_deg", col(&|p| p.model_phase_deg))?;
+        if pts.iter().any(|p| p.phase_deg.is_some()) {
+            d.set_item("phase_deg", col(&|p| p.phase_deg.unwrap_or(f64::NAN)))?;
+        }
+        Ok(d)
+    }
+    /// `fitted_curves()` as a pandas DataFrame (long format, one row per
+    /// measured point; needs pandas).
+    fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        dataframe(py, self.fitted_curves(py)?)
+    }
+    /// The fitted model's stepped-sine sweeps at levels `gamma` (m/s^2, as
+    /// measured: the fitted forcing gain is applied) over `f_hz` (Hz), in
+    /// `direction`: `self.model.sweep(gamma, f_hz, direction)`.
+    #[pyo3(signature = (gamma, f_hz, direction="up"))]
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        gamma: &Bound<'py, PyAny>,
+        f_hz: &Bound<'py, PyAny>,
+        direction: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        Bound::new(py, self.model())?
+            .into_any()
+            .call_method1("sweep", (gamma, f_hz, direction))
     }
     /// Pickling and `copy.deepcopy`: the whole identification (every stage,
     /// so `to_dict()`, `report()` and `profile()` work on the copy as on the

@@ -422,6 +422,34 @@ def test_simulate_warns_as_the_cli_does_when_the_input_is_sampled_too_coarsely(c
         m.simulate(np.sin(2 * np.pi * 10.0 * np.arange(4000) / 1000.0), 1000.0)
 
 
+def test_fitted_curves_predict_and_data_frames(cli, tmp_path):
+    import pandas as pd
+
+    path = tmp_path / "data.csv"
+    write_data(path, wing_data())
+    res = nlsdof.fit(path, model="duffing-quadratic", mass=0.26699)
+    # the fit's own curves: the CLI's --predict table, number for number
+    predict = tmp_path / "p.csv"
+    run_cli(cli, "fit", path, "--model", "duffing-quadratic", "--mass", "0.26699", "--predict", predict)
+    cli_rows = list(csv.DictReader(open(predict)))
+    c = res.fitted_curves()
+    assert len(c["f_hz"]) == len(cli_rows) == 120
+    assert list(c["model_amplitude"]) == [float(r["model_amplitude"]) for r in cli_rows]
+    assert list(c["model_phase_deg"]) == [float(r["model_phase_deg"]) for r in cli_rows]
+    assert c["level"][0] == cli_rows[0]["level"] and c["sweep"][0] == "up"
+    # predict honours the gain: the model curves at the measured levels
+    s = res.predict(float(c["gamma"][0]), c["f_hz"][:40])
+    assert list(s.amplitude) == list(c["model_amplitude"][:40])
+    # DataFrames, long format
+    df = res.to_dataframe()
+    assert isinstance(df, pd.DataFrame) and len(df) == 120
+    assert {"level", "gamma", "f_hz", "amplitude", "sweep", "model_amplitude"} <= set(df.columns)
+    d = nlsdof.read_stepped_sine(path).to_dataframe()
+    assert len(d) == 120 and list(d["gamma"].unique()) == sorted(set(d["gamma"]))
+    # a DataFrame builds the data back
+    assert nlsdof.SteppedSineData(d) == nlsdof.read_stepped_sine(path)
+
+
 def test_type_errors_name_the_argument():
     with pytest.raises(TypeError, match="mass"):
         nlsdof.Model(mass="0.3", stiffness=1.0, damping=0.1)

@@ -479,18 +479,61 @@ pub fn provenance(res: &FitResult, data: Option<&str>) -> nlsdof_io::model_file:
     }
 }
 
-/// The `--predict` CSV of a fit: every measured point with the model's
-/// amplitude and phase lag there (the fit's own model curves, Eq 31: the
-/// model sweep of each curve at `gain * gamma`, starting on the state nearest
-/// the measured first amplitude). Columns `level,gamma,f_hz,amplitude,sweep,
-/// model_amplitude,model_phase_deg`, plus `phase_deg` when the data have
-/// phases; SI, zero-to-peak, numbers written to round-trip exactly. Curves in
-/// data order, points by increasing frequency. The file is itself a
-/// stepped-sine data file (`nlsdof fit`, `nlsdof frf --at` read it).
-pub fn predict_csv(id: &Identification) -> Result<String, ReportError> {
+/// One measured point with the fit's model there (a row of `--predict`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PredictedPoint<'a> {
+    pub level: &'a str,
+    /// Measured level γ, m/s² zero-to-peak.
+    pub gamma: f64,
+    pub f_hz: f64,
+    /// Measured amplitude, m zero-to-peak.
+    pub amplitude: f64,
+    pub sweep: &'static str,
+    /// The model amplitude the fit compared (Eq 31: the model's own sweep).
+    pub model_amplitude: f64,
+    /// The model's phase lag there, deg.
+    pub model_phase_deg: f64,
+    /// Measured phase lag, deg, where the data have phases.
+    pub phase_deg: Option<f64>,
+}
+
+/// Every measured point with the fit's model amplitude and phase there: the
+/// fit's own model curves (Eq 31: each curve's model sweep at `gain * gamma`,
+/// starting on the state nearest the measured first amplitude). Curves in
+/// data order, points by increasing frequency. `--predict` and Python's
+/// `FitResult.fitted_curves()`.
+pub fn predicted_points(id: &Identification) -> Result<Vec<PredictedPoint<'_>>, ReportError> {
     let res = &id.fit;
     let response = nlsdof::identification::objective::model_response(&id.data, &res.theta)?;
-    let with_phase = id.data.curves.iter().any(|c| c.phases.is_some());
+    let mut out = Vec::with_capacity(res.model_amplitudes.len());
+    let mut off = 0;
+    for (c, model) in id.data.curves.iter().zip(&response) {
+        for (k, (&w, &a)) in c.omegas.iter().zip(&c.amplitudes).enumerate() {
+            out.push(PredictedPoint {
+                level: &c.level,
+                gamma: c.gamma,
+                f_hz: hz(w),
+                amplitude: a,
+                sweep: c.direction.name(),
+                // the amplitude the fit compared (bit for bit); its phase from the same sweep
+                model_amplitude: res.model_amplitudes[off + k],
+                model_phase_deg: model[k].1.to_degrees(),
+                phase_deg: c.phases.as_ref().map(|p| p[k].to_degrees()),
+            });
+        }
+        off += c.omegas.len();
+    }
+    Ok(out)
+}
+
+/// The `--predict` CSV of a fit: [`predicted_points`] as columns
+/// `level,gamma,f_hz,amplitude,sweep,model_amplitude,model_phase_deg`, plus
+/// `phase_deg` when the data have phases; SI, zero-to-peak, numbers written
+/// to round-trip exactly. The file is itself a stepped-sine data file
+/// (`nlsdof fit`, `nlsdof frf --at` read it).
+pub fn predict_csv(id: &Identification) -> Result<String, ReportError> {
+    let points = predicted_points(id)?;
+    let with_phase = points.iter().any(|p| p.phase_deg.is_some());
     let mut s = String::from("level,gamma,f_hz,amplitude,sweep,model_amplitude,model_phase_deg");
     if with_phase {
         s.push_str(",phase_deg");
@@ -503,30 +546,26 @@ pub fn predict_csv(id: &Identification) -> Result<String, ReportError> {
             t.to_string()
         }
     };
-    let mut off = 0;
-    for (c, model) in id.data.curves.iter().zip(&response) {
-        let level = quote(&c.level);
-        let dir = c.direction.name();
-        for (k, (&w, &a)) in c.omegas.iter().zip(&c.amplitudes).enumerate() {
-            // the amplitude the fit compared (bit for bit); its phase from the same sweep
-            let a_model = res.model_amplitudes[off + k];
-            let phase = model[k].1.to_degrees();
-            write!(
-                s,
-                "{level},{:?},{:?},{a:?},{dir},{a_model:?},{phase:?}",
-                c.gamma,
-                hz(w)
-            )
-            .ok();
-            if with_phase {
-                match &c.phases {
-                    Some(p) => write!(s, ",{:?}", p[k].to_degrees()).ok(),
-                    None => write!(s, ",").ok(),
-                };
-            }
-            s.push('\n');
+    for p in &points {
+        write!(
+            s,
+            "{},{:?},{:?},{:?},{},{:?},{:?}",
+            quote(p.level),
+            p.gamma,
+            p.f_hz,
+            p.amplitude,
+            p.sweep,
+            p.model_amplitude,
+            p.model_phase_deg
+        )
+        .ok();
+        if with_phase {
+            match p.phase_deg {
+                Some(v) => write!(s, ",{v:?}").ok(),
+                None => write!(s, ",").ok(),
+            };
         }
-        off += c.omegas.len();
+        s.push('\n');
     }
     Ok(s)
 }

@@ -870,6 +870,57 @@ impl FitResult {
         };
         Ok(bytes(self)? == bytes(o.get())?)
     }
+    /// Jupyter: the verdict, then a table of every parameter present with
+    /// its value, unit, status and 95 % interval (when the intervals are
+    /// valid), and the cost.
+    fn _repr_html_(&self) -> String {
+        let fit = &self.id.fit;
+        let esc = |t: &str| {
+            t.replace('&', "&amp;")
+                .replace('<', "&lt;")
+                .replace('>', "&gt;")
+        };
+        let ci = fit.uncertainty.as_ref().filter(|_| fit.warning().is_none());
+        let mut h = format!(
+            "<div><b>nlsdof fit: {}</b> &mdash; cost (Eq 31) {:.6e}, {}",
+            fit.kind.name(),
+            fit.cost,
+            if fit.converged {
+                "converged"
+            } else {
+                "<b>not converged</b>"
+            }
+        );
+        if let Some(w) = self.id.warning() {
+            h += &format!("<br><b>WARNING:</b> {}", esc(&w));
+        }
+        h += "<table><tr><th>parameter</th><th>value</th><th>unit</th><th>status</th><th>95 % interval</th></tr>";
+        for j in 0..nlsdof::identification::N_PARAMS {
+            if fit.status[j] == Status::Absent {
+                continue;
+            }
+            let info = Parameter::ALL[j].info();
+            let status = match fit.status[j] {
+                Status::Free => "free",
+                Status::Fixed(_) => "held",
+                Status::Absent => "",
+            };
+            let interval = ci
+                .and_then(|u| {
+                    u.index(nlsdof::identification::PARAM_NAMES[j])
+                        .map(|k| (u, k))
+                })
+                .map(|(u, k)| format!("[{:.4e}, {:.4e}]", u.lower[k], u.upper[k]))
+                .unwrap_or_else(|| "&mdash;".into());
+            h += &format!(
+                "<tr><td>{}</td><td>{:.6e}</td><td>{}</td><td>{status}</td><td>{interval}</td></tr>",
+                info.name,
+                fit.theta[j],
+                esc(info.unit)
+            );
+        }
+        h + "</table></div>"
+    }
     /// The model, every parameter present with its unit (and 95 % interval
     /// when valid), the cost and the verdict.
     fn __repr__(&self) -> String {

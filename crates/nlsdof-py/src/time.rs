@@ -51,7 +51,22 @@ pub fn decay<'py>(
         t0: 0.0,
     };
     let doc = nlsdof_report::decay::decay_json(&rec, &r, analyse_s, t0.elapsed().as_secs_f64());
-    to_py(py, &doc)
+    let out = to_py(py, &doc)?;
+    // beyond the CLI's document: the curves behind it, as numpy arrays
+    // (time from the first sample, s; the Hilbert envelope and the fitted
+    // model's envelope over the analysed decay, in x's unit)
+    let d = out.cast::<pyo3::types::PyDict>()?;
+    let t: Vec<f64> = (r.start..r.end).map(|k| k as f64 / fs).collect();
+    d.set_item("t", numpy::PyArray1::from_vec(py, t))?;
+    d.set_item(
+        "envelope",
+        numpy::PyArray1::from_vec(py, r.amplitude.clone()),
+    )?;
+    d.set_item(
+        "model_envelope",
+        numpy::PyArray1::from_vec(py, r.model_amplitude.clone()),
+    )?;
+    Ok(out)
 }
 
 /// Output-error fit of the power-law ODE (Eq 32) to the input `u`
@@ -138,8 +153,25 @@ pub fn fit_time<'py>(
         predictions: &preds,
         fit_s: t_fit.elapsed().as_secs_f64(),
     };
-    to_py(
+    let out = to_py(
         py,
         &nlsdof_report::time_fit::json(&run, t0.elapsed().as_secs_f64()),
-    )
+    )?;
+    // beyond the CLI's document: the model output over the estimation range
+    // and each test range (the CLI's --predict), as numpy arrays
+    let d = out.cast::<pyo3::types::PyDict>()?;
+    d.get_item("estimation")?
+        .map(|e| {
+            e.set_item(
+                "y_model",
+                numpy::PyArray1::from_vec(py, fit.y_model.clone()),
+            )
+        })
+        .transpose()?;
+    if let Some(tests) = d.get_item("tests")? {
+        for (entry, p) in tests.try_iter()?.zip(&preds) {
+            entry?.set_item("y_model", numpy::PyArray1::from_vec(py, p.y_model.clone()))?;
+        }
+    }
+    Ok(out)
 }

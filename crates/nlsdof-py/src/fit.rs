@@ -799,6 +799,18 @@ impl FitResult {
         }
         Ok(d)
     }
+    /// The measured points and the fit's model curves per level and sweep
+    /// (matplotlib; `nlsdof.plot.fit`): `ax=None` draws a new figure. Returns
+    /// the Axes.
+    #[pyo3(signature = (ax=None))]
+    fn plot<'py>(
+        slf: &Bound<'py, Self>,
+        ax: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        slf.py()
+            .import("nlsdof.plot")?
+            .call_method1("fit", (slf, ax))
+    }
     /// `fitted_curves()` as a pandas DataFrame (long format, one row per
     /// measured point; needs pandas).
     fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

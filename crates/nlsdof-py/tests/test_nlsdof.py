@@ -450,6 +450,18 @@ def test_fitted_curves_predict_and_data_frames(cli, tmp_path):
     assert len(d) == 120 and list(d["gamma"].unique()) == sorted(set(d["gamma"]))
     # a DataFrame builds the data back
     assert nlsdof.SteppedSineData(d) == nlsdof.read_stepped_sine(path)
+    # and the figure: one model line and one set of dots per curve, on the Axes given
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    assert res.plot(ax=ax) is ax
+    assert len(ax.lines) == 2 * 3 and ax.get_xlabel() == "frequency f [Hz]"
+    assert "amplitude [mm]" in ax.get_ylabel()
+    plt.close(fig)
+    assert res.plot().figure is not None
 
 
 def test_type_errors_name_the_argument():

@@ -120,6 +120,58 @@ impl SteppedSineData {
         d.set_item("weight", self.weight(py))?;
         Ok(d)
     }
+    /// The curves: a list of `(level, gamma, sweep)`, one per curve, in data
+    /// order (gamma in m/s^2).
+    #[getter]
+    fn curves(&self) -> Vec<(String, f64, &'static str)> {
+        self.inner
+            .curves
+            .iter()
+            .map(|c| (c.level.clone(), c.gamma, c.direction.name()))
+            .collect()
+    }
+    /// The curves of one level and/or one sweep direction ("up", "down"), as
+    /// new data; a selection that leaves nothing is a `ValueError` naming
+    /// what there is.
+    #[pyo3(signature = (level=None, sweep=None))]
+    fn select(&self, level: Option<&str>, sweep: Option<&str>) -> PyResult<Self> {
+        let dir = sweep.map(crate::convert::direction).transpose()?;
+        let curves: Vec<_> = self
+            .inner
+            .curves
+            .iter()
+            .filter(|c| level.is_none_or(|l| c.level == l) && dir.is_none_or(|d| c.direction == d))
+            .cloned()
+            .collect();
+        if curves.is_empty() {
+            let have: Vec<String> = self
+                .curves()
+                .iter()
+                .map(|(l, _, s)| format!("{l} ({s})"))
+                .collect();
+            return Err(value_error(format!(
+                "no curve of level {} and sweep {}: the data have {}",
+                level.unwrap_or("any"),
+                sweep.unwrap_or("any"),
+                have.join(", ")
+            )));
+        }
+        Ok(Self {
+            inner: Dataset { curves },
+            source: self.source.clone(),
+        })
+    }
+    /// `data["0.04g"]` is `data.select(level="0.04g")`, `data["0.04g", "down"]`
+    /// `data.select(level="0.04g", sweep="down")`.
+    fn __getitem__(&self, key: &Bound<'_, PyAny>) -> PyResult<Self> {
+        if let Ok(level) = key.extract::<String>() {
+            return self.select(Some(&level), None);
+        }
+        let (level, sweep): (String, String) = key
+            .extract()
+            .map_err(|_| value_error("index the data by a level label, or by (level, sweep)"))?;
+        self.select(Some(&level), Some(&sweep))
+    }
     /// The columns as a pandas DataFrame (long format, one row per point;
     /// needs pandas).
     fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

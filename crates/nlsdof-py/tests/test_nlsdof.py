@@ -449,7 +449,14 @@ def test_fitted_curves_predict_and_data_frames(cli, tmp_path):
     d = nlsdof.read_stepped_sine(path).to_dataframe()
     assert len(d) == 120 and list(d["gamma"].unique()) == sorted(set(d["gamma"]))
     # a DataFrame builds the data back
-    assert nlsdof.SteppedSineData(d) == nlsdof.read_stepped_sine(path)
+    data = nlsdof.read_stepped_sine(path)
+    assert nlsdof.SteppedSineData(d) == data
+    # indexed by level (and sweep), filtered
+    assert [c[0] for c in data.curves] == ["1", "2", "3"]
+    assert len(data["2"]) == 40 and data["2", "up"] == data.select(level="2", sweep="up")
+    assert len(data.select(sweep="up")) == 120
+    with pytest.raises(ValueError, match="the data have 1 \\(up\\), 2 \\(up\\), 3 \\(up\\)"):
+        data.select(sweep="down")
     # and the figure: one model line and one set of dots per curve, on the Axes given
     import matplotlib
 
@@ -853,6 +860,32 @@ def test_demo_workflow_runs(tmp_path):
     assert summary["linear"]["alpha"] == pytest.approx(306.7878 / 0.26699, rel=1e-3)
     assert (tmp_path / "workflow.png").stat().st_size > 10_000
     assert nlsdof.Model.from_toml(tmp_path / "fitted.toml").mass == 0.26699
+
+
+BEAM_24C = ROOT.parent / "shared" / "data" / "clamped-beam-duffing-catarinaluz" / "cc_beam_no_magnet_24C"
+
+
+@pytest.mark.skipif(not BEAM_24C.exists(), reason="needs ../shared/data beside the repository")
+def test_the_readme_beam_loop_runs_and_reproduces_the_fit(tmp_path):
+    # the README's second Python block, as written, in a scratch folder
+    text = (ROOT / "README.md").read_text()
+    first = text.index("```python\n")
+    start = text.index("```python\n", first + 1) + len("```python\n")
+    code = text[start : text.index("```", start)]
+    assert "read_beam_dir" in code and len(code.strip().splitlines()) <= 15
+    code = code.replace('"../shared/', '"' + str(ROOT.parent / "shared") + "/")
+    check = (
+        "\nimport numpy as np\n"
+        "assert np.array_equal(s.amplitude, curves[curves.level == level].model_amplitude.to_numpy())\n"
+        "again = pickle.load(open('beam_fit.pkl', 'rb'))\n"
+        "assert again == r and again.model == m\n"
+        "print('LOOP OK')\n"
+    )
+    env = dict(os.environ, MPLBACKEND="Agg")
+    out = subprocess.run([sys.executable, "-c", code + check], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=600, env=env)
+    assert out.returncode == 0, out.stderr
+    assert "LOOP OK" in out.stdout and (tmp_path / "beam_fit.png").stat().st_size > 10_000
 
 
 def test_the_readme_python_example_runs(tmp_path):

@@ -120,6 +120,9 @@ pub fn decay_notes(r: &DecayAnalysis) -> Vec<String> {
     {
         n.push("eta = -1: Coulomb friction (dry friction force c_e = kappa m)".into());
     }
+    if r.damping.at_bounds == ["delta"] {
+        n.push("delta = 0: no linear damping is seen; the damping is all in the power law".into());
+    }
     n
 }
 
@@ -151,7 +154,8 @@ pub fn decay_warnings(r: &DecayAnalysis) -> Vec<String> {
         _ => {}
     }
     for f in [&r.stiffness, &r.damping] {
-        if !f.at_bounds.is_empty() {
+        // delta at 0 alone is a result (a note), not a doubt about the fit
+        if !f.at_bounds.is_empty() && f.at_bounds != ["delta"] {
             w.push(format!(
                 "{} at a bound of the fit ({}): {}",
                 f.at_bounds.join(", "),

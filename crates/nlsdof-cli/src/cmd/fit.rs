@@ -611,7 +611,10 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         nlsdof_io::atomic::write_atomic(p, bytes)?;
     }
     let profiles = if args.profile {
-        oe_profiles(&id)?
+        // refits with the exponent held: seconds to minutes, a spinner after 1 s
+        crate::cmd::simulate::with_spinner("profile likelihood of the exponents", || {
+            oe_profiles(&id)
+        })?
     } else {
         Vec::new()
     };

@@ -418,10 +418,14 @@ def test_simulate_warns_as_the_cli_does_when_the_input_is_sampled_too_coarsely(c
     err = subprocess.run([cli, "simulate", "--model", str(DUFFING), "--input", str(path), "--fs", str(fs),
                           "--out", str(tmp_path / "x.csv")], capture_output=True, text=True).stderr
     assert "estimated integration error" in err
-    # a well sampled input: no warning
+    # a well sampled input: no warning; check=False skips the check, same numbers
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         m.simulate(np.sin(2 * np.pi * 10.0 * np.arange(4000) / 1000.0), 1000.0)
+        x_unchecked, _ = m.simulate(u, fs, check=False)
+    with pytest.warns(RuntimeWarning):
+        x_checked, _ = m.simulate(u, fs)
+    assert np.array_equal(x_checked, x_unchecked)
 
 
 def test_fitted_curves_predict_and_data_frames(cli, tmp_path):

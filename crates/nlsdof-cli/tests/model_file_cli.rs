@@ -4,7 +4,8 @@
 //! steady-state command applies the `[signal]` table or refuses it in one
 //! line naming the key, writing nothing.
 
-use assert_cmd::Command;
+mod common;
+use common::{nlsdof, ok};
 use nlsdof::{ForcedResponse, Formulation, NormalisedModel, SweepDirection};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -49,10 +50,6 @@ fn write_data(dir: &Path) -> PathBuf {
     let path = dir.join("data.csv");
     std::fs::write(&path, s).unwrap();
     path
-}
-
-fn nlsdof() -> Command {
-    Command::cargo_bin("nlsdof").unwrap()
 }
 
 /// CSV rows as maps.
@@ -154,16 +151,6 @@ fn write_models(dir: &Path) -> (PathBuf, PathBuf) {
     (plain, gained)
 }
 
-fn stdout_of(args: &[&str]) -> String {
-    let o = nlsdof().args(args).output().unwrap();
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8(o.stdout).unwrap()
-}
-
 #[test]
 fn steady_state_commands_apply_the_input_gain() {
     let dir = tempfile::tempdir().unwrap();
@@ -171,7 +158,7 @@ fn steady_state_commands_apply_the_input_gain() {
     let (p, g) = (plain.to_str().unwrap(), gained.to_str().unwrap());
     // roots: the gained model at gamma equals the plain one at 2 gamma
     let roots = |m: &str, gamma: &str| -> serde_json::Value {
-        serde_json::from_str(&stdout_of(&[
+        serde_json::from_str(&ok(&[
             "roots", "--model", m, "--gamma", gamma, "--f-hz", "10.5", "--json",
         ]))
         .unwrap()
@@ -181,11 +168,11 @@ fn steady_state_commands_apply_the_input_gain() {
     assert_eq!(a["gamma"], 0.4, "the level as given");
     assert_eq!(a["input_gain"], 2.0);
     assert_eq!(b["input_gain"], 1.0);
-    let text = stdout_of(&["roots", "--model", g, "--gamma", "0.4", "--f-hz", "10.5"]);
+    let text = ok(&["roots", "--model", g, "--gamma", "0.4", "--f-hz", "10.5"]);
     assert!(text.contains("input_gain = 2"), "{text}");
     // frf: the same curves, the levels as given
     let frf = |m: &str, gamma: &str| {
-        rows(&stdout_of(&[
+        rows(&ok(&[
             "frf", "--model", m, "--gamma", gamma, "--f-min", "8", "--f-max", "14", "--steps",
             "40", "--csv",
         ]))
@@ -197,7 +184,7 @@ fn steady_state_commands_apply_the_input_gain() {
     }
     // multi-harmonic balance too
     let mhb = |m: &str, gamma: &str| -> serde_json::Value {
-        serde_json::from_str(&stdout_of(&[
+        serde_json::from_str(&ok(&[
             "frf",
             "--model",
             m,

@@ -190,6 +190,30 @@ impl SignalMap {
     }
 }
 
+impl SignalMap {
+    /// The gain a steady-state (harmonic-balance) computation applies to its
+    /// levels, or why it cannot apply this map: a non-zero `input_offset` is
+    /// a static force, which shifts the equilibrium of a nonlinear model (a
+    /// balance about zero cannot represent it); a negative gain inverts the
+    /// input. One rule for the CLI's steady-state commands and Python's
+    /// `Model` methods.
+    pub fn steady_state_gain(&self) -> Result<f64, String> {
+        if self.input_offset != 0.0 {
+            return Err(format!(
+                "[signal] input_offset = {:?} is a static force, which shifts the equilibrium of a nonlinear model; the steady-state (harmonic balance) computations cannot apply it: simulate the time response instead, or remove the offset to see the response without it",
+                self.input_offset
+            ));
+        }
+        if self.input_gain < 0.0 {
+            return Err(format!(
+                "[signal] input_gain = {:?} < 0 inverts the input; the steady-state computations need a gain > 0 (the amplitudes are those of |input_gain|, the phases shifted by 180 deg)",
+                self.input_gain
+            ));
+        }
+        Ok(self.input_gain)
+    }
+}
+
 impl Default for SignalMap {
     fn default() -> Self {
         Self {

@@ -66,20 +66,10 @@ impl Model {
     /// refuses what a harmonic balance about zero cannot apply (the CLI's
     /// rule, `nlsdof frf --help`).
     fn steady_gain(&self) -> PyResult<f64> {
-        let s = self.signal.unwrap_or_default();
-        if s.input_offset != 0.0 {
-            return Err(value_error(format!(
-                "signal input_offset = {:?} is a static force, which shifts the equilibrium of a nonlinear model; the steady-state (harmonic balance) methods cannot apply it: use simulate(), or a model without it",
-                s.input_offset
-            )));
-        }
-        if s.input_gain < 0.0 {
-            return Err(value_error(format!(
-                "signal input_gain = {:?} < 0 inverts the input; the steady-state methods need a gain > 0",
-                s.input_gain
-            )));
-        }
-        Ok(s.input_gain)
+        self.signal
+            .unwrap_or_default()
+            .steady_state_gain()
+            .map_err(value_error)
     }
 }
 

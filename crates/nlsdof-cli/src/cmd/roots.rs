@@ -115,22 +115,11 @@ pub fn load_document(path: &Path) -> Result<nlsdof_io::model_file::ModelDocument
 /// a non-zero `input_offset` (a static force) or a negative `input_gain`.
 pub fn load_steady_model(path: &Path) -> Result<(Model, f64), CliError> {
     let doc = load_document(path)?;
-    let s = doc.signal_or_identity();
-    if s.input_offset != 0.0 {
-        return Err(CliError::Usage(format!(
-            "{}: [signal] input_offset = {:?} is a static force, which shifts the equilibrium of a nonlinear model; the steady-state (harmonic balance) commands cannot apply it: use `nlsdof simulate`, or delete the line to see the response without it",
-            path.display(),
-            s.input_offset
-        )));
-    }
-    if s.input_gain < 0.0 {
-        return Err(CliError::Usage(format!(
-            "{}: [signal] input_gain = {:?} < 0 inverts the input; the steady-state commands need a gain > 0 (the amplitudes are those of |input_gain|, the phases shifted by 180 deg)",
-            path.display(),
-            s.input_gain
-        )));
-    }
-    Ok((doc.model, s.input_gain))
+    let gain = doc
+        .signal_or_identity()
+        .steady_state_gain()
+        .map_err(|why| CliError::Usage(format!("{}: {why}", path.display())))?;
+    Ok((doc.model, gain))
 }
 
 /// The note a steady-state command prints when the model file's gain is

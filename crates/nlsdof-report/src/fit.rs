@@ -87,6 +87,9 @@ pub fn identification_document(
 ) -> Result<Value, ReportError> {
     let mut v = result_json(&id.data, &id.fit, mass)?;
     v["warning"] = json!(id.warning());
+    // a likely unit mistake (levels in g, amplitudes in mm), also the
+    // warning's first line
+    v["unit_hint"] = json!(id.unit_hint());
     v["notes"] = json!(id.fit.notes());
     v["adequacy"] = adequacy_json(id);
     v["levels"] = Value::Array(curves_json(id));

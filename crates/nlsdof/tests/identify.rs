@@ -594,3 +594,36 @@ fn sweeps_at_the_data_reproduce_the_fit_bit_for_bit() {
     let e = sweeps_at_data(&model, -1.0, &r.data).unwrap_err();
     assert!(e.to_string().contains("input_gain"), "{e}");
 }
+
+/// Unit hints (issue 28): levels given in g fit with a free gain of
+/// 9.80665 and say so first; amplitudes given in mm (1000x) do not fit and
+/// say they may be mm; the same data in SI get no hint.
+#[test]
+fn likely_unit_mistakes_are_named_first() {
+    let t = duffing_quadratic();
+    let si = duffing_quadratic_data(&t);
+    let fit =
+        |d: &Dataset| identify(d, &FitPlan::new(ModelKind::DuffingQuadratic), &|_| {}).unwrap();
+    assert_eq!(fit(&si).unit_hint(), None);
+    let mut in_g = si.clone();
+    for c in &mut in_g.curves {
+        c.gamma /= identify::G_STANDARD;
+    }
+    let r = fit(&in_g);
+    let hint = r.unit_hint().expect("a hint for levels in g");
+    assert!(hint.contains("look like they are in g"), "{hint}");
+    assert!(
+        r.warning().unwrap().starts_with("HINT"),
+        "{:?}",
+        r.warning()
+    );
+    let mut in_mm = si.clone();
+    for c in &mut in_mm.curves {
+        for a in &mut c.amplitudes {
+            *a *= 1000.0;
+        }
+    }
+    let r = fit(&in_mm);
+    let hint = r.unit_hint().expect("a hint for amplitudes in mm");
+    assert!(hint.contains("in mm"), "{hint}");
+}

@@ -174,6 +174,19 @@ pub const DECREMENT_TOL: f64 = 1e-4;
 /// F threshold for freeing the gain (χ²₁ 0.1 % point).
 pub const GAIN_F_THRESHOLD: f64 = 10.83;
 
+/// Standard gravity, m/s² (the unit hint of a gain near it).
+pub const G_STANDARD: f64 = 9.80665;
+
+/// Relative distance of a free gain from [`G_STANDARD`] within which
+/// [`Identification::unit_hint`] says the levels look like g.
+pub const G_HINT_TOLERANCE: f64 = 0.03;
+
+/// Resonance amplification `a Ω²/γ` above which a fit that does not fit
+/// gets the hint that the amplitudes may be in mm: a damping ratio under
+/// 5e-5 (lightly damped structures in air reach 1e3; the factor 1000 of
+/// mm read as m puts them far above).
+pub const AMPLIFICATION_HINT: f64 = 1e4;
+
 /// A curve does not fit when the mean of its squared noise-scaled
 /// residuals exceeds this (residual `√4 = 2×` the noise). Set from the
 /// in-family suites (docs/identification.md): fits at the truth's cost
@@ -617,6 +630,9 @@ impl Identification {
     /// fit's own warning.
     pub fn warning(&self) -> Option<String> {
         let mut parts = Vec::new();
+        if let Some(h) = self.unit_hint() {
+            parts.push(h);
+        }
         if let Some(m) = self.adequacy_message() {
             parts.push(m);
         }
@@ -624,6 +640,47 @@ impl Identification {
             parts.push(w);
         }
         (!parts.is_empty()).then(|| parts.join("\n"))
+    }
+
+    /// A likely unit mistake in the data, with its fix (issue 28), or
+    /// `None`:
+    /// * a free forcing gain within [`G_HINT_TOLERANCE`] of g = 9.80665:
+    ///   the levels were given in g;
+    /// * a fit that does not fit, on data whose resonance amplification
+    ///   `a Ω²/(gain γ)` exceeds [`AMPLIFICATION_HINT`] (a damping ratio
+    ///   under 5e-5): amplitudes 1000x too large read that way, so they may
+    ///   be in mm.
+    pub fn unit_hint(&self) -> Option<String> {
+        let gain = self.fit.theta[GAIN];
+        if matches!(self.fit.status[GAIN], Status::Free)
+            && (gain / G_STANDARD - 1.0).abs() <= G_HINT_TOLERANCE
+        {
+            return Some(format!(
+                "HINT: the fitted forcing gain is {gain:.4}, within {:.0} % of g = {G_STANDARD} m/s^2: the levels \
+                 look like they are in g; give gamma in m/s^2 (CLI: --gamma-in-g; Python: gamma_in_g=True)",
+                100.0 * G_HINT_TOLERANCE
+            ));
+        }
+        if self.adequacy.adequate {
+            return None;
+        }
+        let amplification = self
+            .data
+            .curves
+            .iter()
+            .filter_map(|c| {
+                let k = c.peak_index();
+                let g = c.gamma * gain;
+                (g > 0.0).then(|| c.amplitudes[k] * c.omegas[k] * c.omegas[k] / g)
+            })
+            .fold(0.0f64, f64::max);
+        (amplification > AMPLIFICATION_HINT).then(|| {
+            format!(
+                "HINT: at the resonance peak the response is {amplification:.3e} times the input (a Omega^2 / gamma, \
+                 a damping ratio near {:.1e}); if the amplitudes are in mm, give them in m (zero-to-peak)",
+                0.5 / amplification
+            )
+        })
     }
 
     /// "WARNING: the model does not fit levels 0.08g, 0.10g: residual 6.2x

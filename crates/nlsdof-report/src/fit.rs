@@ -393,13 +393,26 @@ pub fn identification_text(id: &Identification) -> String {
                 g.gain,
                 g.f_statistic,
             ),
-            None => writeln!(
-                s,
-                "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {t})",
-                if g.freed { "free" } else { "held at 1" },
-                g.gain,
-                g.f_statistic,
-            ),
+            None => {
+                let (lo, hi) = id.spec.bounds[nlsdof::identification::models::GAIN];
+                // held although F passes: the estimate lies outside the
+                // gain's bounds (say so, not only the F test)
+                let why = if !g.freed && g.f_statistic > t && !(g.gain > lo && g.gain < hi) {
+                    format!(
+                        "; held because the estimate lies outside the gain's bounds [{lo}, {hi}]: \
+                         check the units of the levels and amplitudes"
+                    )
+                } else {
+                    String::new()
+                };
+                writeln!(
+                    s,
+                    "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {t}{why})",
+                    if g.freed { "free" } else { "held at 1" },
+                    g.gain,
+                    g.f_statistic,
+                )
+            }
         }
         .ok();
     }

@@ -17,6 +17,9 @@
 //!   at 90° phase per level) for `nlsdof fit --phase-resonance`.
 //! * [`table_file`] — numeric columns of a delimited table chosen by name or
 //!   index (recorded input/output pairs for `nlsdof fit-time`).
+//! * [`uff58`] — Universal File Format dataset 58 / 58b (measured functions
+//!   of vibration test systems: time responses, spectra, FRFs, coherences):
+//!   reader of ASCII and binary files, ASCII and binary writer.
 
 pub mod atomic;
 pub mod bounds_file;
@@ -30,6 +33,7 @@ pub mod signal_file;
 pub mod stepped_sine_data;
 pub mod table_file;
 pub mod text;
+pub mod uff58;
 
 pub use error::IoError;
 

@@ -84,6 +84,9 @@ pub enum SignalFileError {
     },
     #[error("{path}: {message}")]
     MatContent { path: PathBuf, message: String },
+    /// A universal file that holds no usable time history ([`read_uff`]).
+    #[error("{path}: {message}")]
+    Uff { path: PathBuf, message: String },
     /// A named CSV column that cannot be read ([`read_csv_column`]).
     #[error("{path}: {message}")]
     Column { path: PathBuf, message: String },
@@ -260,22 +263,131 @@ fn check_fs(path: &Path, fs: Option<f64>) -> Result<(), SignalFileError> {
 }
 
 /// Reads a signal, choosing the format by extension (`.mat` → MAT v5,
-/// anything else → CSV). `fs` is the sampling frequency for a one-column
-/// signal; `var` the MAT variable name.
+/// `.uff`/`.unv` → universal file dataset 58, anything else → CSV). `fs`
+/// is the sampling frequency for a one-column signal; `var` the MAT
+/// variable name, or the UFF dataset ([`read_uff`]).
 pub fn read_signal(
     path: &Path,
     fs: Option<f64>,
     var: Option<&str>,
 ) -> Result<Signal, SignalFileError> {
-    let is_mat = path
+    let ext = path
         .extension()
-        .map(|e| e.eq_ignore_ascii_case("mat"))
-        .unwrap_or(false);
-    if is_mat {
-        read_mat(path, fs, var)
-    } else {
-        read_csv(path, fs)
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "mat" => read_mat(path, fs, var),
+        "uff" | "unv" => read_uff(path, fs, var),
+        _ => read_csv(path, fs),
     }
+}
+
+/// A time history from a universal file (dataset 58 or 58b, read by
+/// [`crate::uff58`]): the real function chosen by `dataset` — its index
+/// among the file's dataset-58 functions (from 0), or text contained in
+/// its ID line 1 — or, when `None`, the file's only time response
+/// (function type 1), else its only function. The abscissa is the time in
+/// s: an even one gives `(t0, fs)`, an uneven one the times. `fs` is
+/// refused (the file states its sampling). Complex functions (FRFs,
+/// spectra) are refused naming the dataset.
+pub fn read_uff(
+    path: &Path,
+    fs: Option<f64>,
+    dataset: Option<&str>,
+) -> Result<Signal, SignalFileError> {
+    use crate::uff58::{function_type_name, read, Abscissa, Uff58Data};
+    let uff = |message: String| SignalFileError::Uff {
+        path: path.into(),
+        message,
+    };
+    let all = read(path).map_err(|e| uff(e.to_string()))?;
+    if all.is_empty() {
+        return Err(uff("the universal file holds no dataset 58".into()));
+    }
+    let listing = || {
+        all.iter()
+            .map(|f| {
+                format!(
+                    "{}: {} '{}'",
+                    f.info.index,
+                    function_type_name(f.dataset.header.function_type),
+                    f.dataset.header.id1.trim()
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let chosen: Vec<&crate::uff58::Uff58Function> = match dataset {
+        Some(sel) => match sel.trim().parse::<usize>() {
+            Ok(i) => all.iter().filter(|f| f.info.index == i).collect(),
+            Err(_) => all
+                .iter()
+                .filter(|f| f.dataset.header.id1.contains(sel))
+                .collect(),
+        },
+        None => {
+            let times: Vec<_> = all
+                .iter()
+                .filter(|f| f.dataset.header.function_type == 1)
+                .collect();
+            if times.is_empty() && all.len() == 1 {
+                all.iter().collect()
+            } else {
+                times
+            }
+        }
+    };
+    let f = match chosen.as_slice() {
+        [f] => *f,
+        [] => {
+            return Err(uff(format!(
+                "no dataset {} (datasets: {})",
+                dataset.map_or("is a time response".to_string(), |d| format!(
+                    "matches '{d}'"
+                )),
+                listing()
+            )))
+        }
+        _ => {
+            return Err(uff(format!(
+                "{} datasets match; choose one by index or ID-line text with --var (datasets: {})",
+                chosen.len(),
+                listing()
+            )))
+        }
+    };
+    let Uff58Data::Real(values) = &f.dataset.data else {
+        return Err(uff(format!(
+            "dataset {} is complex ({}): a time history is a real function",
+            f.info.index,
+            function_type_name(f.dataset.header.function_type)
+        )));
+    };
+    if let Some(fs) = fs {
+        return Err(SignalFileError::FsWithTimeColumn {
+            path: path.into(),
+            fs,
+        });
+    }
+    let (times, rate) = match &f.dataset.abscissa {
+        Abscissa::Even { start, step } => {
+            if !(step.is_finite() && *step > 0.0 && start.is_finite()) {
+                return Err(uff(format!(
+                    "dataset {}: abscissa start {start}, increment {step}: not a sampling in time",
+                    f.info.index
+                )));
+            }
+            (None, Some(1.0 / step))
+        }
+        Abscissa::Uneven(t) => (Some(t.clone()), None),
+    };
+    let mut s = finish(path, values.clone(), times, rate)?;
+    if let (Abscissa::Even { start, .. }, SignalGrid::Uniform { t0, .. }) =
+        (&f.dataset.abscissa, &mut s.grid)
+    {
+        *t0 = *start;
+    }
+    Ok(s)
 }
 
 fn finish(

@@ -47,7 +47,9 @@ pub struct Args {
     /// Sampling frequency of a one-column input, Hz (> 0).
     #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
     pub fs: Option<f64>,
-    /// Variable name in a .mat input (default: the only array, or `accel`).
+    /// Variable name in a .mat input (default: the only array, or `accel`), or the
+    /// dataset of a .uff/.unv universal file (dataset 58/58b: its index from 0, or
+    /// text of its ID line 1; default: the file's only time response).
     #[arg(long, value_name = "NAME")]
     pub var: Option<String>,
     /// Integrator.

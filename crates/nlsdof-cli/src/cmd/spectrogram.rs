@@ -48,7 +48,8 @@ pub struct Args {
     /// Signal file (the measurement): CSV or MAT, as read by `simulate --input`.
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
-    /// Column (CSV header name, e.g. x for `simulate` output) or MAT variable; default: the accel column.
+    /// Column (CSV header name, e.g. x for `simulate` output), MAT variable, or the dataset of a
+    /// .uff/.unv universal file (index from 0 or ID-line text); default: the accel column.
     #[arg(long, value_name = "NAME")]
     pub column: Option<String>,
     /// Sampling frequency of a one-column CSV, Hz.
@@ -138,7 +139,8 @@ COMPARISON (--compare, paper Eq 33), measured s_exp = --input, model s_num = --c
 
 INPUT:
   CSV t,value or one column with --fs, or a header with named columns (--column NAME,
-  e.g. x, v or accel of `nlsdof simulate` output), or a MAT v5 file (--column = variable).
+  e.g. x, v or accel of `nlsdof simulate` output), a MAT v5 file (--column = variable),
+  or a universal file .uff/.unv, dataset 58/58b (--column = dataset index or ID-line text).
   Sampling must be uniform. Errors: one line on stderr, exit 2, no output file.
 
 EXAMPLE (a virtual measurement and a model with other parameters, same input):

@@ -13,6 +13,18 @@
 //! Without a header, 3 columns are `f_hz,re,im` and 2 columns `f_hz,mag`.
 //! Written files have `f_hz,re,im,mag,phase_deg[,coherence]`.
 //!
+//! ## FRF in a universal file (`.uff`/`.unv`, read by `nlsdof linear-id`)
+//!
+//! [`read_frf`] reads a dataset 58/58b ([`crate::uff58`]) with complex
+//! values: by default the file's only frequency response function
+//! (function type 4), else the dataset chosen by a selector — its index
+//! among the file's dataset-58 functions (from 0) or text of its ID line 1
+//! — which may be any complex function. A real function (coherence,
+//! magnitude) is refused. The abscissa must be a frequency in Hz
+//! (units label `Hz`, or specific data type 18 without a units label; see
+//! [`crate::uff_convert`]), non-negative and strictly increasing, the
+//! values finite. The values are used as stored (no unit conversion).
+//!
 //! ## Time histories (read by `nlsdof frf-estimate`)
 //!
 //! * **Polytec ASCII export** (`.txt` whose first line starts
@@ -23,6 +35,11 @@
 //!   number of named channels; separators comma, semicolon, tab or spaces.
 //! * **MAT v5**: one variable per channel (read with
 //!   [`crate::signal_file::read_signal`]).
+//! * **Universal file** (`.uff`/`.unv`, dataset 58/58b): one real function
+//!   a channel, chosen by its number among the file's dataset-58 functions
+//!   counted from 1 (dataset index + 1, like the CSV channel numbers) or by
+//!   text of its ID line 1; its abscissa must be a time in s, evenly
+//!   spaced (or uneven but uniform). A complex function is refused.
 //!
 //! The sampling must be uniform (time steps equal within 1e-3 of a step).
 //!
@@ -76,6 +93,9 @@ pub fn read_channel(
     key: &str,
     fs: Option<f64>,
 ) -> Result<(f64, Vec<f64>), FrfFileError> {
+    if crate::uff_convert::is_uff(path) {
+        return read_uff_channel(path, key, fs);
+    }
     let is_mat = path
         .extension()
         .map(|e| e.eq_ignore_ascii_case("mat"))
@@ -98,6 +118,153 @@ pub fn read_channel(
     let th = read_time_history(path, fs)?;
     let v = th.channel(key, path)?.to_vec();
     Ok((th.fs, v))
+}
+
+/// A channel of a universal file (see the module documentation): the real
+/// function chosen by `key` (number from 1, or ID-line-1 text), with its
+/// sampling frequency, Hz. `fs` is refused (the file states its sampling).
+pub fn read_uff_channel(
+    path: &Path,
+    key: &str,
+    fs: Option<f64>,
+) -> Result<(f64, Vec<f64>), FrfFileError> {
+    use crate::uff58::{function_type_name, Abscissa, Uff58Data};
+    let content = |message: String| FrfFileError::Content {
+        path: path.into(),
+        message,
+    };
+    let all = crate::uff58::read(path).map_err(|e| content(e.to_string()))?;
+    let f = crate::uff_convert::select(&all, Some(key), 1, "the channel option", "", |_| false)
+        .map_err(|m| content(format!("channel {key:?}: {m}")))?;
+    let label = format!(
+        "channel {} ({:?})",
+        f.info.index + 1,
+        f.dataset.header.id1.trim()
+    );
+    let Uff58Data::Real(values) = &f.dataset.data else {
+        return Err(content(format!(
+            "{label} is complex ({}): a time history is a real function",
+            function_type_name(f.dataset.header.function_type)
+        )));
+    };
+    crate::uff_convert::check_time_axis(&label, &f.dataset.header).map_err(content)?;
+    if let Some(g) = fs {
+        return Err(content(format!(
+            "the file states its sampling; --fs {g} would contradict it (drop --fs)"
+        )));
+    }
+    if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+        return Err(content(format!(
+            "{label}: sample {k} is {} (not finite)",
+            values[k]
+        )));
+    }
+    let rate = match &f.dataset.abscissa {
+        Abscissa::Even { step, .. } => {
+            if !(step.is_finite() && *step > 0.0) {
+                return Err(content(format!(
+                    "{label}: time increment {step} s must be > 0"
+                )));
+            }
+            1.0 / step
+        }
+        Abscissa::Uneven(t) => {
+            let lines = vec![0; t.len()];
+            uniform_fs(path, t, &lines).map_err(|e| {
+                content(format!(
+                    "{label}: {}",
+                    match e {
+                        FrfFileError::Line { message, .. }
+                        | FrfFileError::Content { message, .. } => message,
+                        other => other.to_string(),
+                    }
+                ))
+            })?
+        }
+    };
+    if values.len() < 2 {
+        return Err(content(format!(
+            "{label}: {} sample(s): need at least 2",
+            values.len()
+        )));
+    }
+    Ok((rate, values.clone()))
+}
+
+/// Reads an FRF: a universal file (`.uff`/`.unv`, dataset chosen by
+/// `dataset`, see the module documentation) or else an FRF CSV table
+/// ([`read_frf_csv`], where `dataset` must be `None`).
+pub fn read_frf(path: &Path, dataset: Option<&str>) -> Result<FrfTable, FrfFileError> {
+    if crate::uff_convert::is_uff(path) {
+        return read_frf_uff(path, dataset);
+    }
+    if let Some(d) = dataset {
+        return Err(FrfFileError::Content {
+            path: path.into(),
+            message: format!(
+                "--dataset {d:?} chooses a dataset of a universal file (.uff/.unv); this is read as a CSV table"
+            ),
+        });
+    }
+    read_frf_csv(path)
+}
+
+/// The FRF of a universal file (see the module documentation).
+pub fn read_frf_uff(path: &Path, dataset: Option<&str>) -> Result<FrfTable, FrfFileError> {
+    use crate::uff58::{function_type_name, Uff58Data};
+    let content = |message: String| FrfFileError::Content {
+        path: path.into(),
+        message,
+    };
+    let all = crate::uff58::read(path).map_err(|e| content(e.to_string()))?;
+    let f = crate::uff_convert::select(
+        &all,
+        dataset,
+        0,
+        "--dataset",
+        "is a complex frequency response function (function type 4)",
+        |f| f.info.complex && f.dataset.header.function_type == 4,
+    )
+    .map_err(content)?;
+    let label = format!(
+        "dataset {} ({:?})",
+        f.info.index,
+        f.dataset.header.id1.trim()
+    );
+    let Uff58Data::Complex(values) = &f.dataset.data else {
+        return Err(content(format!(
+            "{label} is real ({}): an FRF is a complex function",
+            function_type_name(f.dataset.header.function_type)
+        )));
+    };
+    crate::uff_convert::check_frequency_axis(&label, &f.dataset.header).map_err(content)?;
+    if values.is_empty() {
+        return Err(FrfFileError::Empty { path: path.into() });
+    }
+    let f_hz = f.dataset.abscissa_values();
+    for (k, (&fr, &(re, im))) in f_hz.iter().zip(values).enumerate() {
+        if !(fr.is_finite() && re.is_finite() && im.is_finite()) {
+            return Err(content(format!(
+                "{label}: point {k}: frequency {fr} Hz, value ({re}, {im}) is not finite"
+            )));
+        }
+        if k == 0 && fr < 0.0 {
+            return Err(content(format!("{label}: negative frequency {fr} Hz")));
+        }
+        if k > 0 && fr <= f_hz[k - 1] {
+            return Err(content(format!(
+                "{label}: point {k}: frequency {fr} Hz does not exceed the previous one ({} Hz): frequencies must be strictly increasing",
+                f_hz[k - 1]
+            )));
+        }
+    }
+    let magnitude = values.iter().map(|(a, b)| a.hypot(*b)).collect();
+    Ok(FrfTable {
+        f_hz,
+        values: Some(values.clone()),
+        magnitude,
+        coherence: None,
+    })
 }
 
 /// An FRF table read from CSV.
@@ -632,6 +799,71 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("expected 3 columns"));
+    }
+
+    fn oracle(name: &str) -> (PathBuf, serde_json::Value) {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/uff58")
+            .join(name);
+        let text = std::fs::read_to_string(p.with_file_name(format!("{name}.json"))).unwrap();
+        (p, serde_json::from_str(&text).unwrap())
+    }
+
+    fn num(v: &serde_json::Value) -> f64 {
+        v.as_str().unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn uff_frfs_read_as_pyuff_reads_them() {
+        for name in [
+            "ascii_double_complex_even_frf.uff",
+            "binary_double_complex_uneven_frf_be.uff",
+            "crlf_ascii_double_complex_even_frf.uff",
+        ] {
+            let (p, j) = oracle(name);
+            let t = read_frf(&p, None).unwrap();
+            let set = &j["sets"][0];
+            let x = set["x"].as_array().unwrap();
+            let data = set["data"].as_array().unwrap();
+            let v = t.values.as_ref().unwrap();
+            assert_eq!(t.f_hz.len(), x.len(), "{name}");
+            for k in 0..x.len() {
+                let (re, im) = (num(&data[k][0]), num(&data[k][1]));
+                let f = num(&x[k]);
+                // pyuff's x of an even abscissa is min + k inc: round-off only
+                assert!((t.f_hz[k] - f).abs() <= 1e-12 * f.abs(), "{name} {k}");
+                assert_eq!(v[k], (re, im), "{name} {k}");
+                assert_eq!(t.magnitude[k], re.hypot(im));
+            }
+            assert_eq!(read_frf(&p, Some("0")).unwrap(), t);
+        }
+        // a real function chosen, a file without an FRF, a time abscissa
+        let (p, _) = oracle("ascii_single_real_even_coherence.uff");
+        let e = read_frf(&p, Some("0")).unwrap_err().to_string();
+        assert!(
+            e.contains("is real (coherence): an FRF is a complex function"),
+            "{e}"
+        );
+        let e = read_frf(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("no dataset is a complex frequency response function"),
+            "{e}"
+        );
+        // any complex function may be chosen explicitly (a cross spectrum)
+        let (p, _) = oracle("ascii_single_complex_even_crossspectrum.uff");
+        assert!(read_frf(&p, None).is_err());
+        assert!(read_frf(&p, Some("Cross")).is_ok());
+        let (p, _) = oracle("ascii_double_real_even_time.uff");
+        let e = read_uff_channel(&p, "1", None).unwrap();
+        assert!(e.1.len() > 2);
+        let e = read_frf(&p, Some("0")).unwrap_err().to_string();
+        assert!(e.contains("is real (time response)"), "{e}");
+        let (p, _) = oracle("ascii_double_complex_even_frf.uff");
+        let e = read_uff_channel(&p, "1", None).unwrap_err().to_string();
+        assert!(
+            e.contains("is complex (frequency response function)"),
+            "{e}"
+        );
     }
 
     #[test]

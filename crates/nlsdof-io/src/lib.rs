@@ -34,6 +34,7 @@ pub mod stepped_sine_data;
 pub mod table_file;
 pub mod text;
 pub mod uff58;
+pub mod uff_convert;
 
 pub use error::IoError;
 

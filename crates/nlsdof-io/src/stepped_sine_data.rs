@@ -14,6 +14,34 @@
 //!   level `A` (g) is taken from the file name; displacement = v / Ω. The
 //!   phases are relative to the vibrometer's reference channel, not a lag
 //!   behind the base acceleration, so they are not used.
+//! * **Universal file** (`.uff`/`.unv`, dataset 58/58b, [`read_uff`]): one
+//!   complex FRF per level and sweep — every dataset 58 with complex values
+//!   and function type 4 (FRF) or 5 (transmissibility); other functions
+//!   (spectra, coherences, time responses) are skipped. Each is a response
+//!   over the input (base) acceleration: the ordinate numerator (record 9)
+//!   a displacement (specific data type 8 or units `m`: receptance,
+//!   m/(m/s²)), velocity (11, `m/s`) or acceleration (12, `m/s^2`:
+//!   accelerance or transmissibility), the denominator (record 10) an
+//!   acceleration (12 or `m/s^2`); other quantities, units other than SI
+//!   and a missing quantity are refused ([`crate::uff_convert::quantity`]).
+//!   The abscissa must be a frequency in Hz (> 0). With `H` the FRF value
+//!   and `γ` the level, the displacement phasor is `X = H γ` for a
+//!   displacement, `V γ / (jΩ)` for a velocity and `−A γ / Ω²` for an
+//!   acceleration, so the amplitude is `a = |H| γ`, `|H| γ / Ω` and
+//!   `|H| γ / Ω²`. **Phase**: the model's convention `x = a cos(Ωt − φ)`
+//!   under the input `γ cos(Ωt)` is `X = a e^{−jφ}` (time factor
+//!   `e^{+jΩt}`, as FRFs are written), so the phase lag is
+//!   `φ = −arg X` in (−180°, 180°], the `phase_deg` of the long CSV:
+//!   `nlsdof frf --uff` writes `H = (a/γ) e^{−jφ}`.
+//!   **Level** `γ` (m/s², zero-to-peak), first found of: the CLI's list
+//!   (`--level-gamma`, one value a dataset in file order); a token
+//!   `gamma=VALUE` (m/s²) in an ID line; the z-axis value (record 7 field 6)
+//!   when the z axis (record 11) is an acceleration — units label `m/s^2`,
+//!   or `g` (× 9.80665), or specific data type 12 without a units label. A
+//!   dataset without a level is refused. **Sweep** direction: a token
+//!   `sweep=up|down` in an ID line, default up. **Level name**: a token
+//!   `level=NAME`, else the value of γ (so the up and down sweeps of one
+//!   level form one level). Weights are 1.
 
 use crate::csv_table::{
     column, lowercase, number, CsvOptions, CsvReadError, CsvRows, Row, Separator,
@@ -77,6 +105,10 @@ pub enum SteppedSineDataError {
     NoBeamFiles { path: PathBuf },
     #[error("{path}: {source}")]
     Data { path: PathBuf, source: DataError },
+    /// A universal file that holds no usable stepped-sine FRFs
+    /// ([`read_uff`]).
+    #[error("{path}: {message}")]
+    Uff { path: PathBuf, message: String },
 }
 
 fn convert(opts: &ReadOptions, gamma: f64, omega: f64, amplitude: f64) -> (f64, f64) {
@@ -203,6 +235,160 @@ pub fn read_csv(path: &Path, opts: &ReadOptions) -> Result<Dataset, SteppedSineD
         source,
     })?;
     parse_csv(&text, path, opts)
+}
+
+/// Reads stepped-sine FRFs from a universal file (see the module
+/// documentation): one curve per complex FRF dataset. `level_gamma`, when
+/// given, holds the level γ (m/s², zero-to-peak) of each such dataset in
+/// file order and overrides the header.
+pub fn read_uff(path: &Path, level_gamma: Option<&[f64]>) -> Result<Dataset, SteppedSineDataError> {
+    use crate::uff58::{Uff58Data, Uff58Function};
+    use crate::uff_convert::{check_frequency_axis, id_token, listing, quantity, Quantity};
+    let uff = |message: String| SteppedSineDataError::Uff {
+        path: path.into(),
+        message,
+    };
+    let all = crate::uff58::read(path).map_err(|e| uff(e.to_string()))?;
+    let frfs: Vec<&Uff58Function> = all
+        .iter()
+        .filter(|f| f.info.complex && matches!(f.dataset.header.function_type, 4 | 5))
+        .collect();
+    if frfs.is_empty() {
+        return Err(uff(format!(
+            "no complex FRF or transmissibility (function type 4 or 5) among the datasets ({})",
+            if all.is_empty() {
+                "none".to_string()
+            } else {
+                listing(&all, 0)
+            }
+        )));
+    }
+    if let Some(g) = level_gamma {
+        if g.len() != frfs.len() {
+            return Err(uff(format!(
+                "--level-gamma gives {} level(s) but the file holds {} FRF dataset(s) (indices {})",
+                g.len(),
+                frfs.len(),
+                frfs.iter()
+                    .map(|f| f.info.index.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+    }
+    let mut recs = Vec::new();
+    for (n, f) in frfs.iter().enumerate() {
+        let h = &f.dataset.header;
+        let label = format!("dataset {} ({:?})", f.info.index, h.id1.trim());
+        check_frequency_axis(&label, h).map_err(uff)?;
+        let num = quantity(
+            &format!("{label}: ordinate numerator (record 9)"),
+            &h.ordinate_axis,
+        )
+        .map_err(uff)?;
+        let den = quantity(
+            &format!("{label}: ordinate denominator (record 10)"),
+            &h.denominator_axis,
+        )
+        .map_err(uff)?;
+        let power = match num {
+            Some(Quantity::Displacement) => 0,
+            Some(Quantity::Velocity) => 1,
+            Some(Quantity::Acceleration) => 2,
+            other => {
+                return Err(uff(format!(
+                    "{label}: the ordinate numerator (record 9) is {}: need a displacement (m), velocity (m/s) or acceleration (m/s^2) response",
+                    other.map_or("not stated (specific data type 0/1, no units label)", |q| q.name())
+                )))
+            }
+        };
+        if den != Some(Quantity::Acceleration) {
+            return Err(uff(format!(
+                "{label}: the ordinate denominator (record 10) is {}: fit needs the response per input (base) acceleration (m/s^2)",
+                den.map_or("not stated (specific data type 0/1, no units label)", |q| q.name())
+            )));
+        }
+        let gamma = match level_gamma {
+            Some(g) => g[n],
+            None => level_of(h).map_err(|m| uff(format!("{label}: {m}")))?.ok_or_else(|| {
+                uff(format!(
+                    "{label} states no level: give gamma=VALUE (m/s^2) in an ID line, a z-axis value with an acceleration z axis (units m/s^2 or g), or the levels with --level-gamma"
+                ))
+            })?,
+        };
+        if !(gamma.is_finite() && gamma > 0.0) {
+            return Err(uff(format!(
+                "{label}: level gamma {gamma} m/s^2 must be finite and > 0"
+            )));
+        }
+        let direction = match id_token(h, "sweep") {
+            None => SweepDirection::Up,
+            Some((_, v)) if v.eq_ignore_ascii_case("up") => SweepDirection::Up,
+            Some((_, v)) if v.eq_ignore_ascii_case("down") => SweepDirection::Down,
+            Some((line, v)) => {
+                return Err(uff(format!(
+                    "{label}: ID line {line}: sweep={v} must be up or down"
+                )))
+            }
+        };
+        let level = id_token(h, "level").map_or_else(|| format!("{gamma}"), |(_, v)| v);
+        let Uff58Data::Complex(values) = &f.dataset.data else {
+            continue; // filtered above: complex only
+        };
+        let f_hz = f.dataset.abscissa_values();
+        for (k, (&fr, &(re, im))) in f_hz.iter().zip(values).enumerate() {
+            if !(fr.is_finite() && fr > 0.0) {
+                return Err(uff(format!(
+                    "{label}: point {k}: frequency {fr} Hz must be finite and > 0"
+                )));
+            }
+            if !(re.is_finite() && im.is_finite()) {
+                return Err(uff(format!(
+                    "{label}: point {k} ({fr} Hz): value ({re}, {im}) is not finite"
+                )));
+            }
+            let omega = TWO_PI * fr;
+            // displacement phasor X = H gamma / (j Omega)^power
+            let (xr, xi) = match power {
+                0 => (re * gamma, im * gamma),
+                1 => (im * gamma / omega, -re * gamma / omega),
+                _ => (-re * gamma / (omega * omega), -im * gamma / (omega * omega)),
+            };
+            recs.push(Record {
+                level: level.clone(),
+                gamma,
+                omega,
+                amplitude: xr.hypot(xi),
+                phase: Some(-xi.atan2(xr)),
+                direction,
+                weight: 1.0,
+            });
+        }
+    }
+    Dataset::from_records(&recs).map_err(|source| SteppedSineDataError::Data {
+        path: path.into(),
+        source,
+    })
+}
+
+/// The level γ (m/s²) a dataset's header states (see the module
+/// documentation), `None` when it states none.
+fn level_of(h: &crate::uff58::Uff58Header) -> Result<Option<f64>, String> {
+    if let Some((line, v)) = crate::uff_convert::id_token(h, "gamma") {
+        return match v.parse::<f64>() {
+            Ok(g) => Ok(Some(g)),
+            Err(_) => Err(format!("ID line {line}: gamma={v} is not a number (m/s^2)")),
+        };
+    }
+    let z = &h.z_axis;
+    let units: String = z.units.chars().filter(|c| !c.is_whitespace()).collect();
+    let scale = match units.as_str() {
+        "m/s^2" | "m/s2" | "m/s**2" | "m/s\u{b2}" => Some(1.0),
+        "g" => Some(STANDARD_GRAVITY),
+        "" | "NONE" | "none" if z.specific_data_type == 12 => Some(1.0),
+        _ => None,
+    };
+    Ok(scale.map(|s| h.z_axis_value * s))
 }
 
 /// How a fit names beam-directory data (the model file's
@@ -384,6 +570,86 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn uff_transmissibility_as_pyuff_reads_it() {
+        // pyuff's oracle: function type 5, acceleration over acceleration,
+        // no level in the header
+        let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/uff58/ascii_single_complex_uneven_transmissibility.uff");
+        let e = read_uff(&p, None).unwrap_err().to_string();
+        assert!(e.contains("states no level"), "{e}");
+        let text = std::fs::read_to_string(p.with_extension("uff.json")).unwrap();
+        let j: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let num = |v: &serde_json::Value| v.as_str().unwrap().parse::<f64>().unwrap();
+        let set = &j["sets"][0];
+        let (x, data) = (
+            set["x"].as_array().unwrap(),
+            set["data"].as_array().unwrap(),
+        );
+        let gamma = 2.5;
+        let d = read_uff(&p, Some(&[gamma])).unwrap();
+        assert_eq!(d.curves.len(), 1);
+        let c = &d.curves[0];
+        assert_eq!((c.gamma, c.direction), (gamma, SweepDirection::Up));
+        let phases = c.phases.as_ref().unwrap();
+        for k in 0..x.len() {
+            let (f, re, im) = (num(&x[k]), num(&data[k][0]), num(&data[k][1]));
+            let w = TWO_PI * f;
+            assert!((c.omegas[k] - w).abs() <= 1e-15 * w);
+            let a = re.hypot(im) * gamma / (w * w);
+            assert!((c.amplitudes[k] - a).abs() <= 1e-15 * a, "{k}");
+            // X = -A gamma / w^2: the lag is -arg(-A)
+            let lag = -((-im).atan2(-re));
+            assert!((phases[k] - lag).abs() <= 1e-15, "{k}");
+        }
+    }
+
+    #[test]
+    fn uff_receptance_phase_level_and_sweep_tokens() {
+        use crate::uff58::{write_binary_file, Abscissa, AxisInfo, Uff58Dataset};
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.uff");
+        // a = 2e-3 m lagging 30 deg at 10, 11 and 12 Hz, gamma = 0.25 g in the z axis,
+        // as a velocity per acceleration: V/gamma = j Omega a e^{-j phi} / gamma
+        let (a, phi, gamma) = (2e-3, 30f64.to_radians(), 0.25 * STANDARD_GRAVITY);
+        let h = [10.0, 11.0, 12.0]
+            .iter()
+            .map(|f| {
+                let w = TWO_PI * f;
+                (w * a * phi.sin() / gamma, w * a * phi.cos() / gamma)
+            })
+            .collect();
+        let mut d = Uff58Dataset::frf(Abscissa::Uneven(vec![10.0, 11.0, 12.0]), h);
+        d.header.id4 = "sweep=down level=L1".into();
+        d.header.ordinate_axis = AxisInfo::new(0, "Velocity", "m/s");
+        d.header.denominator_axis = AxisInfo::new(12, "Acceleration", "NONE");
+        d.header.z_axis = AxisInfo::new(1, "Level", "g");
+        d.header.z_axis_value = 0.25;
+        write_binary_file(&p, &[d.clone()]).unwrap();
+        let s = read_uff(&p, None).unwrap();
+        let c = &s.curves[0];
+        assert_eq!(
+            (c.level.as_str(), c.direction),
+            ("L1", SweepDirection::Down)
+        );
+        assert_eq!(c.gamma, gamma);
+        for k in 0..3 {
+            assert!((c.amplitudes[k] - a).abs() <= 1e-15 * a);
+            assert!((c.phases.as_ref().unwrap()[k] - phi).abs() <= 1e-15);
+        }
+        d.header.id4 = "sweep=sideways".into();
+        write_binary_file(&p, &[d.clone()]).unwrap();
+        let e = read_uff(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("ID line 4: sweep=sideways must be up or down"),
+            "{e}"
+        );
+        d.header.id4 = "gamma=abc".into();
+        write_binary_file(&p, &[d]).unwrap();
+        let e = read_uff(&p, None).unwrap_err().to_string();
+        assert!(e.contains("ID line 4: gamma=abc is not a number"), "{e}");
     }
 
     #[test]

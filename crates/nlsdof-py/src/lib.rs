@@ -13,6 +13,7 @@ mod fit;
 mod model;
 mod signal;
 mod time;
+mod uff;
 
 use pyo3::prelude::*;
 
@@ -44,6 +45,8 @@ fn _nlsdof(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(signal::compare_spectrograms, m)?)?;
     m.add_function(wrap_pyfunction!(time::decay, m)?)?;
     m.add_function(wrap_pyfunction!(time::fit_time, m)?)?;
+    m.add_function(wrap_pyfunction!(uff::read_uff, m)?)?;
+    m.add_function(wrap_pyfunction!(uff::write_uff, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -33,9 +33,20 @@ pub enum RunsArg {
 /// Data options shared by `fit` and `compare`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct DataArgs {
-    /// Long-format CSV: level,gamma,f_hz,amplitude[,phase_deg][,sweep][,weight].
+    /// Long-format CSV: level,gamma,f_hz,amplitude[,phase_deg][,sweep][,weight]; or a
+    /// universal file (.uff/.unv): one complex FRF dataset 58 per level and sweep, response
+    /// (m, m/s or m/s^2) per input acceleration (m/s^2), abscissa in Hz (see the README).
     #[arg(value_name = "DATA", required_unless_present = "beam_dir")]
     pub data: Option<PathBuf>,
+    /// Levels gamma, m/s^2 zero-to-peak, of the FRF datasets of a universal-file DATA, one per
+    /// complex FRF dataset in file order (overrides the header's gamma=VALUE token or
+    /// acceleration z-axis value; needed when the file states no level).
+    #[arg(
+        long = "level-gamma",
+        value_name = "G1,G2,..",
+        allow_hyphen_values = true
+    )]
+    pub level_gamma: Option<String>,
     /// Read a directory of frf_<A>g.txt files (tab-separated, decimal comma,
     /// velocity amplitudes of up and down runs side by side) instead of DATA.
     #[arg(long = "beam-dir", value_name = "DIR", conflicts_with = "data")]
@@ -92,12 +103,26 @@ impl DataArgs {
             CliError::Usage(format!("{e}{hint}"))
         };
         if let Some(dir) = &self.beam_dir {
+            if self.level_gamma.is_some() {
+                return Err(CliError::Usage(
+                    "--level-gamma gives the levels of a universal file (.uff/.unv); --beam-dir takes them from the file names".into(),
+                ));
+            }
             return read_beam_dir(dir, self.runs()).map_err(err);
         }
         let path = self
             .data
             .as_ref()
             .expect("clap requires DATA or --beam-dir");
+        if nlsdof_io::uff_convert::is_uff(path) {
+            return self.load_uff(path).map_err(err);
+        }
+        if self.level_gamma.is_some() {
+            return Err(CliError::Usage(format!(
+                "--level-gamma gives the levels of a universal file (.uff/.unv); {} is read as CSV (put the levels in its gamma column)",
+                path.display()
+            )));
+        }
         let opts = ReadOptions {
             amplitude: if self.velocity {
                 AmplitudeKind::Velocity
@@ -110,6 +135,49 @@ impl DataArgs {
             peak_to_peak: self.peak_to_peak,
         };
         read_csv(path, &opts).map_err(err)
+    }
+
+    /// A universal file of stepped-sine FRFs: the quantities come from its
+    /// header, so the CSV unit flags do not apply.
+    fn load_uff(
+        &self,
+        path: &Path,
+    ) -> Result<Dataset, nlsdof_io::stepped_sine_data::SteppedSineDataError> {
+        let uff = |message: String| nlsdof_io::stepped_sine_data::SteppedSineDataError::Uff {
+            path: path.into(),
+            message,
+        };
+        for (set, flag) in [
+            (self.velocity, "--velocity"),
+            (self.acceleration, "--acceleration"),
+            (self.gamma_in_g, "--gamma-in-g"),
+            (self.peak_to_peak, "--peak-to-peak"),
+        ] {
+            if set {
+                return Err(uff(format!(
+                    "{flag} applies to CSV data; a universal file states its quantities in its header"
+                )));
+            }
+        }
+        let gammas = match &self.level_gamma {
+            None => None,
+            Some(text) => Some(
+                text.split(',')
+                    .map(|item| {
+                        let item = item.trim();
+                        item.parse::<f64>()
+                            .ok()
+                            .filter(|g| g.is_finite() && *g > 0.0)
+                            .ok_or_else(|| {
+                                uff(format!(
+                                    "--level-gamma: '{item}' is not a level: give input levels (m/s^2, zero-to-peak) as a comma-separated list of finite numbers > 0"
+                                ))
+                            })
+                    })
+                    .collect::<Result<Vec<f64>, _>>()?,
+            ),
+        };
+        nlsdof_io::stepped_sine_data::read_uff(path, gammas.as_deref())
     }
 }
 

@@ -98,6 +98,12 @@ pub struct Args {
     /// Also write an SVG plot of amplitude vs frequency to FILE.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    /// Also write the curves as a universal file (ASCII dataset 58, double precision): one
+    /// complex FRF per level, receptance H = (a/gamma) e^(-j phi) in m/(m/s^2) over the
+    /// frequency in Hz, level in the z axis (m/s^2) and `gamma=G sweep=up|down level=K` in ID
+    /// line 2 (what `fit` reads). Frequencies keep 7 significant digits (the format's E13.5).
+    #[arg(long, value_name = "FILE.uff")]
+    pub uff: Option<PathBuf>,
     /// Harmonics H of the balance: 1 = exact first order (default); 2..64 = multi-harmonic
     /// balance (constant and even terms included) with continuation and Hill stability.
     #[arg(long, value_name = "H", default_value_t = 1)]
@@ -133,6 +139,12 @@ OUTPUT:
   --plot FILE.svg: amplitude vs frequency, one colour per level; stable branches solid,
         unstable dashed, backbone dotted grey, swept points as markers, jumps as arrows.
         The plot is written atomically: on any error no file is created.
+  --uff FILE.uff: universal file, ASCII dataset 58 (double precision), one complex FRF
+        per level: receptance H = (a/gamma) e^(-j phi), m/(m/s^2) (ordinate displacement
+        over denominator acceleration), frequencies increasing in Hz, gamma as the z-axis
+        value (m/s^2) and `gamma=G sweep=up|down level=K` in ID line 2, so that
+        `nlsdof fit FILE.uff` reads it back. Abscissa values keep 7 significant digits
+        (E13.5 fields of the format). Written atomically; first-order curves only.
 
 MODEL FILE [signal] TABLE:
   A model file written by `nlsdof fit --out` holds the fit's forcing gain as
@@ -226,6 +238,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
 
     super::frf_mhb::check_harmonics(args.harmonics)?;
+    if args.harmonics > 1 && args.uff.is_some() {
+        return Err(CliError::Usage(format!(
+            "--uff writes first-order curves; --harmonics {} is not supported with it",
+            args.harmonics
+        )));
+    }
     if args.harmonics > 1 {
         if args.formulation != FormulationArg::Hb {
             return Err(CliError::Usage(format!(
@@ -343,6 +361,10 @@ fn emit(
         with_gain_note(text, gain)
     };
 
+    let uff = match &args.uff {
+        Some(_) => Some(uff_datasets(levels, formulation)?),
+        None => None,
+    };
     if let Some(path) = &args.plot {
         let input = plot::FrfPlot {
             title,
@@ -359,6 +381,66 @@ fn emit(
             let _ = writeln!(stdout_text, "\nplot written to {}", path.display());
         }
     }
+    if let (Some(path), Some(datasets)) = (&args.uff, &uff) {
+        nlsdof_io::uff58::write_ascii_file(path, datasets)?;
+        if !args.json && !args.csv {
+            let _ = writeln!(stdout_text, "universal file written to {}", path.display());
+        }
+    }
     print!("{stdout_text}");
     Ok(())
+}
+
+/// The swept curves as dataset-58 receptances `H = (a/gamma) e^(-j phi)`
+/// (m/(m/s^2)), one per level, frequencies increasing; level K (from 1),
+/// gamma and sweep direction in ID line 2 and gamma as the z-axis value.
+fn uff_datasets(
+    levels: &[nlsdof::LevelResponse],
+    formulation: nlsdof::Formulation,
+) -> Result<Vec<nlsdof_io::uff58::Uff58Dataset>, CliError> {
+    use nlsdof_io::uff58::{Abscissa, AxisInfo, Uff58Dataset};
+    let mut out = Vec::new();
+    for (i, l) in levels.iter().enumerate() {
+        let mut points: Vec<&nlsdof::SweepPoint> = l.sweep.points.iter().collect();
+        if let Some(p) = points.iter().find(|p| p.unbounded) {
+            return Err(CliError::Usage(format!(
+                "--uff: the response at level {} (gamma {} m/s^2) is unbounded at {} Hz: a universal file holds finite values only",
+                i + 1,
+                l.gamma,
+                p.omega / (2.0 * PI)
+            )));
+        }
+        points.sort_by(|a, b| a.omega.total_cmp(&b.omega));
+        let f: Vec<f64> = points.iter().map(|p| p.omega / (2.0 * PI)).collect();
+        let h: Vec<(f64, f64)> = points
+            .iter()
+            .map(|p| {
+                let r = p.amplitude / l.gamma;
+                (r * p.phase.cos(), -r * p.phase.sin())
+            })
+            .collect();
+        let sweep = match l.sweep.direction {
+            SweepDirection::Up => "up",
+            SweepDirection::Down => "down",
+        };
+        let mut d = Uff58Dataset::frf(Abscissa::Uneven(f), h);
+        d.header.id1 = format!("nlsdof frf receptance level {}", i + 1);
+        d.header.id2 = format!("gamma={} sweep={sweep} level={}", l.gamma, i + 1);
+        d.header.id3 = format!("formulation {formulation:?}");
+        d.header.ordinate_axis = AxisInfo {
+            length_exponent: 1,
+            ..AxisInfo::new(8, "Displacement", "m")
+        };
+        d.header.denominator_axis = AxisInfo {
+            length_exponent: 1,
+            ..AxisInfo::new(12, "Acceleration", "m/s^2")
+        };
+        d.header.z_axis = AxisInfo {
+            length_exponent: 1,
+            ..AxisInfo::new(12, "Level", "m/s^2")
+        };
+        d.header.z_axis_value = l.gamma;
+        out.push(d);
+    }
+    Ok(out)
 }

@@ -28,16 +28,20 @@ pub enum WindowArg {
 #[derive(clap::Args)]
 #[command(about = "Estimate an FRF (H1, H2 or spectral ratio) from input/output time histories", after_long_help = LONG_HELP)]
 pub struct Args {
-    /// Time-history file holding the input channel (CSV with header, Polytec ASCII .txt, or MAT v5).
+    /// Time-history file holding the input channel (CSV with header, Polytec ASCII .txt, MAT v5,
+    /// or universal file .uff/.unv: one real dataset 58 per channel, abscissa time in s).
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
     /// File holding the output channel, if not the --input file (e.g. Polytec exports: one channel per file).
     #[arg(long = "output-file", value_name = "FILE")]
     pub output_file: Option<PathBuf>,
-    /// Input channel: column/variable name or 1-based index among the channels (default 1).
+    /// Input channel: column/variable name or 1-based index among the channels (default 1);
+    /// in a universal file K is the dataset's position among its dataset-58 functions from 1
+    /// (index + 1) and NAME text contained in its ID line 1 (one dataset must match).
     #[arg(long = "input-channel", value_name = "NAME|K", default_value = "1")]
     pub input_channel: String,
-    /// Output channel: name or 1-based index (default 2, or 1 with --output-file).
+    /// Output channel: name or 1-based index (default 2, or 1 with --output-file); universal
+    /// files as --input-channel.
     #[arg(long = "output-channel", value_name = "NAME|K")]
     pub output_channel: Option<String>,
     /// Sampling frequency, Hz, for files without a time column.
@@ -93,6 +97,11 @@ INPUT FILES:
   exports (.txt starting `Source File Name`, one channel per file: use --output-file);
   MAT v5 (one variable per channel, named with --input-channel/--output-channel; fs from a
   scalar `fs`, a `t` vector or --fs). Sampling must be uniform.
+  Universal file (.uff/.unv, dataset 58/58b): each channel is a real dataset (time
+  response) with a time abscissa in s, chosen by its position K from 1 among the file's
+  dataset-58 functions (dataset index + 1; default 1 and 2, as for CSV columns) or by text
+  of its ID line 1; the sampling comes from the file (--fs is refused). Complex functions
+  (FRFs, spectra) are refused.
 
 EXAMPLES:
   nlsdof frf-estimate --input test.csv --input-channel force --output-channel vel --out h1.csv

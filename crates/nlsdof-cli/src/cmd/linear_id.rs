@@ -41,9 +41,15 @@ pub enum WeightArg {
     after_long_help = LONG_HELP
 )]
 pub struct Args {
-    /// FRF table (CSV: f_hz,re,im or f_hz,mag[,phase_deg]; see FRF FILE below).
-    #[arg(value_name = "FRF.csv")]
+    /// FRF table (CSV: f_hz,re,im or f_hz,mag[,phase_deg]) or universal file (.uff/.unv,
+    /// dataset 58, complex, abscissa in Hz); see FRF FILE below.
+    #[arg(value_name = "FRF.csv|FRF.uff")]
     pub frf: PathBuf,
+    /// Dataset of a universal file: INDEX among its dataset-58 functions (from 0) or TEXT
+    /// contained in its ID line 1 (default: the file's only FRF, function type 4). Any
+    /// complex function may be chosen; values are used in the file's units, frequencies in Hz.
+    #[arg(long, value_name = "INDEX|TEXT")]
+    pub dataset: Option<String>,
     /// Number of complex pole pairs, or `auto` (add pairs while the RMS error falls by > 10 %).
     #[arg(long, value_name = "N|auto", default_value = "auto")]
     pub poles: String,
@@ -114,6 +120,11 @@ const LONG_HELP: &str = "DESCRIPTION:
 FRF FILE:
   CSV with a header: f_hz and either re,im or mag[,phase_deg] (coherence optional),
   frequencies in Hz strictly increasing; `nlsdof frf-estimate` writes this format.
+  Universal file (.uff/.unv, dataset 58 or 58b): the file's only frequency response
+  function (function type 4), or the dataset chosen with --dataset INDEX|TEXT (index from
+  0, or text of ID line 1; any complex function). The abscissa must be a frequency in Hz
+  (units label Hz, or specific data type 18); real functions are refused. State the
+  FRF's quantities with --input/--output: the values are used as stored.
 
 MODEL FILE (--out):
   mass, stiffness, damping of the chosen mode (no nonlinear terms). With acceleration input
@@ -139,7 +150,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             args.max_iterations
         )));
     }
-    let table = nlsdof_io::frf_file::read_frf_csv(&args.frf)?;
+    let table = nlsdof_io::frf_file::read_frf(&args.frf, args.dataset.as_deref())?;
     let f_lo = args.f_min.unwrap_or(f64::NEG_INFINITY);
     let f_hi = args.f_max.unwrap_or(f64::INFINITY);
     if f_lo.is_nan() || f_hi.is_nan() || f_lo >= f_hi {

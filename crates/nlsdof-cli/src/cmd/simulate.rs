@@ -76,8 +76,10 @@ pub struct Args {
     /// Write every N-th sample only.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub decimate: usize,
-    /// Output CSV (t,accel,x,v); written atomically, nothing on error or Ctrl-C.
-    #[arg(long, value_name = "FILE.csv")]
+    /// Output CSV (t,accel,x,v), or a universal file when FILE ends in .uff/.unv (time
+    /// responses accel m/s^2, x m, v m/s over time in s; see OUTPUT); written atomically,
+    /// nothing on error or Ctrl-C.
+    #[arg(long, value_name = "FILE.csv|FILE.uff")]
     pub out: PathBuf,
     /// Print the run summary as JSON.
     #[arg(long)]
@@ -120,7 +122,12 @@ SIGNAL MAP:
 
 OUTPUT:
   --out FILE.csv: header t,accel,x,v (s, m/s^2 input as used, m, m/s), one row per
-  (decimated) sample; t,accel,x,v,y with a [signal] table. A one-line summary (or --json) goes to stdout.
+  (decimated) sample; t,accel,x,v,y with a [signal] table.
+  --out FILE.uff (or .unv): a universal file instead (ASCII dataset 58, double precision,
+  written atomically at the end): time responses (function type 1) with ID line 1 `accel`
+  (m/s^2), `x` (m), `v` (m/s) [and `y` (m)], in that order (dataset indices 0..3); time in s,
+  evenly spaced from t0 by decimate/fs (start and step keep 7 significant digits, the
+  format's E13.5), or the sample times for non-uniform input. A one-line summary (or --json) goes to stdout.
 
 EXAMPLE:
   nlsdof signal chirp --amplitude 0.25 --f0 4.5 --f1 6 --duration 300 --fs 2048 --out chirp.csv
@@ -128,6 +135,62 @@ EXAMPLE:
 
 /// [`super::roots::load_document`]: the model and its optional `[signal]`
 /// table (gain and offsets of `fit-time` models, gain of `fit` models).
+/// The output rows `t,accel,x,v,y` as dataset-58 time responses (function
+/// type 1): accel (m/s^2, input as used), x (m), v (m/s) and, with a
+/// [signal] table, y (m); evenly spaced from the input's t0 every
+/// decimate/fs s on uniform sampling, else at the sample times.
+fn uff_datasets(
+    rows: &[[f64; 5]],
+    with_y: bool,
+    grid: &SignalGrid,
+    decimate: usize,
+) -> Vec<nlsdof_io::uff58::Uff58Dataset> {
+    use nlsdof_io::uff58::{Abscissa, AxisInfo, Uff58Dataset};
+    let columns: &[(usize, &str, i32, &str, &str, &str)] = &[
+        (
+            1,
+            "accel",
+            12,
+            "Acceleration",
+            "m/s^2",
+            "input acceleration as used",
+        ),
+        (2, "x", 8, "Displacement", "m", "displacement"),
+        (3, "v", 11, "Velocity", "m/s", "velocity"),
+        (
+            4,
+            "y",
+            8,
+            "Displacement",
+            "m",
+            "output y = x + output_offset",
+        ),
+    ];
+    let (start, step) = match grid {
+        SignalGrid::Uniform { t0, fs } => (*t0, decimate as f64 / fs),
+        SignalGrid::Times(_) => (0.0, 0.0),
+    };
+    columns
+        .iter()
+        .filter(|c| with_y || c.0 != 4)
+        .map(|&(col, name, kind, label, units, what)| {
+            let mut d =
+                Uff58Dataset::time_response(start, step, rows.iter().map(|r| r[col]).collect());
+            if let SignalGrid::Times(_) = grid {
+                d.abscissa = Abscissa::Uneven(rows.iter().map(|r| r[0]).collect());
+            }
+            d.header.id1 = name.to_string();
+            d.header.id2 = format!("nlsdof simulate: {what} ({units})");
+            d.header.function_id = col as i64;
+            d.header.ordinate_axis = AxisInfo {
+                length_exponent: 1,
+                ..AxisInfo::new(kind, label, units)
+            };
+            d
+        })
+        .collect()
+}
+
 pub(crate) fn load_model_with_signal(
     path: &Path,
 ) -> Result<(Model, Option<nlsdof_io::model_file::SignalMap>), CliError> {
@@ -265,7 +328,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
     } else {
         &["t", "accel", "x", "v"]
     };
-    let mut out = CsvWriter::create(&a.out, header)?;
+    // --out FILE.uff: the rows are kept and written as a universal file at the end
+    let to_uff = nlsdof_io::uff_convert::is_uff(&a.out);
+    let mut out = if to_uff {
+        None
+    } else {
+        Some(CsvWriter::create(&a.out, header)?)
+    };
+    let mut rows: Vec<[f64; 5]> = Vec::new();
     let n = input.len() as u64;
     let progress = Progress::new(n, "simulating");
     let mut write_err = None;
@@ -283,7 +353,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             xs.push(x);
         }
         if k % a.decimate == 0 {
-            if write_err.is_none() {
+            if let Some(out) = out.as_mut().filter(|_| write_err.is_none()) {
                 let r = if with_y {
                     out.row(&[input.time(k), u, x, v, x + map.output_offset])
                 } else {
@@ -292,6 +362,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 if let Err(e) = r {
                     write_err = Some(e);
                 }
+            } else if to_uff {
+                rows.push([input.time(k), u, x, v, x + map.output_offset]);
             }
             outputs += 1;
         }
@@ -332,7 +404,13 @@ pub fn run(a: Args) -> Result<(), CliError> {
         }
         _ => None,
     };
-    out.commit()?;
+    match out {
+        Some(out) => out.commit()?,
+        None => nlsdof_io::uff58::write_ascii_file(
+            &a.out,
+            &uff_datasets(&rows, with_y, &signal.grid, a.decimate),
+        )?,
+    }
     progress.finish();
     let elapsed = t_sim.elapsed().as_secs_f64();
     if let Some(e) = error_estimate.filter(|&e| !(e <= ERROR_WARN)) {

@@ -34,7 +34,9 @@ from ._nlsdof import (
     linear_id,
     read_beam_dir,
     read_stepped_sine,
+    read_uff,
     spectrogram,
+    write_uff,
 )
 
 __all__ = [
@@ -56,5 +58,7 @@ __all__ = [
     "linear_id",
     "read_beam_dir",
     "read_stepped_sine",
+    "read_uff",
     "spectrogram",
+    "write_uff",
 ]

@@ -1531,10 +1531,14 @@ fn race(
         .iter()
         .map(|f| f.objective)
         .fold(f64::INFINITY, f64::min);
+    let full = refine_data.len() >= setup.data.len();
     let relocated: Vec<Option<Fitted>> = finalists
         .par_iter()
         .map(|f| {
-            (f.objective > RELOCATE_FACTOR * lead)
+            // on a subsample the measured steps are coarser than the data's:
+            // a fold placed in one of them is not placed in the data's (the
+            // stages on every point relocate folds there)
+            (full && f.objective > RELOCATE_FACTOR * lead)
                 .then(|| relocate_folds(setup, f.clone(), refine_data, RACE_ITERATIONS).ok())
                 .flatten()
                 .filter(|g| g.objective < f.objective)
@@ -2376,6 +2380,9 @@ fn relocate_folds(
     )?;
     let mut cand = Fitted::from_result(r, spec);
     cand.objective = cand.fit.objective + cand.fit.phase_cost.unwrap_or(0.0);
+    // a refit its budget stopped continues without the barrier (the
+    // fold's own barrier holds it), so it does not end "not converged"
+    let mut cand = continue_unfinished(setup, cand, work)?;
     // read exactly, a late fold is not a solution: the fit that keeps
     // the folds in their measured intervals replaces it when its Eq 31
     // cost is lower (the judge then says whether it fits the noise)

@@ -458,23 +458,37 @@ fn a_held_exponent_is_fitted_when_the_warm_chain_degenerates() {
     );
 }
 
+/// A blind suite's CSV (`level,gamma,f_hz,amplitude[,phase_deg],sweep`,
+/// as `../shared/tools/blind_suite.py` writes it) as a data set.
+fn blind_set(text: &str) -> Dataset {
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name);
+    let (phase, sweep) = (col("phase_deg"), col("sweep").unwrap());
+    let recs: Vec<Record> = lines
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            Record {
+                level: f[0].to_string(),
+                gamma: f[1].parse().unwrap(),
+                omega: std::f64::consts::TAU * f[2].parse::<f64>().unwrap(),
+                amplitude: f[3].parse().unwrap(),
+                phase: phase.map(|k| f[k].parse::<f64>().unwrap().to_radians()),
+                direction: if f[sweep] == "down" {
+                    SweepDirection::Down
+                } else {
+                    SweepDirection::Up
+                },
+                weight: 1.0,
+            }
+        })
+        .collect();
+    Dataset::from_records(&recs).unwrap()
+}
+
 /// Blind set g3 h016-mixed and its truth (mass-normalised).
 fn blind_h016() -> (Dataset, Parameters) {
-    let text = include_str!("data/blind_h016_mixed.csv");
-    let mut recs = Vec::new();
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        recs.push(Record {
-            level: f[0].to_string(),
-            gamma: f[1].parse().unwrap(),
-            omega: std::f64::consts::TAU * f[2].parse::<f64>().unwrap(),
-            amplitude: f[3].parse().unwrap(),
-            phase: None,
-            direction: SweepDirection::Up,
-            weight: 1.0,
-        });
-    }
-    let data = Dataset::from_records(&recs).unwrap();
+    let data = blind_set(include_str!("data/blind_h016_mixed.csv"));
     let truth = Parameters::from([
         2108.328697240462,
         0.10752970059097348,
@@ -513,25 +527,7 @@ fn a_late_fold_is_pulled_into_its_measured_jump() {
 
 /// Blind set h032-mixed (seed 783382638) and its truth (mass-normalised).
 fn blind_h032() -> (Dataset, Parameters) {
-    let text = include_str!("data/blind_h032_mixed.csv");
-    let mut recs = Vec::new();
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        recs.push(Record {
-            level: f[0].to_string(),
-            gamma: f[1].parse().unwrap(),
-            omega: std::f64::consts::TAU * f[2].parse::<f64>().unwrap(),
-            amplitude: f[3].parse().unwrap(),
-            phase: Some(f[4].parse::<f64>().unwrap().to_radians()),
-            direction: if f[5] == "down" {
-                SweepDirection::Down
-            } else {
-                SweepDirection::Up
-            },
-            weight: 1.0,
-        });
-    }
-    let data = Dataset::from_records(&recs).unwrap();
+    let data = blind_set(include_str!("data/blind_h032_mixed.csv"));
     let truth = Parameters::from([
         4942968.377441952,
         6.370792300585375,
@@ -555,25 +551,7 @@ fn blind_h032() -> (Dataset, Parameters) {
 /// into its measured step.
 #[test]
 fn a_race_candidate_with_a_misplaced_fold_is_relocated() {
-    let text = include_str!("data/blind_h047_mixed.csv");
-    let mut recs = Vec::new();
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        recs.push(Record {
-            level: f[0].to_string(),
-            gamma: f[1].parse().unwrap(),
-            omega: std::f64::consts::TAU * f[2].parse::<f64>().unwrap(),
-            amplitude: f[3].parse().unwrap(),
-            phase: None,
-            direction: if f[4] == "down" {
-                SweepDirection::Down
-            } else {
-                SweepDirection::Up
-            },
-            weight: 1.0,
-        });
-    }
-    let data = Dataset::from_records(&recs).unwrap();
+    let data = blind_set(include_str!("data/blind_h047_mixed.csv"));
     let truth = Parameters::from([
         3048.2682500907176,
         2.0811596444451395,

@@ -2329,22 +2329,10 @@ fn relocate_folds(
                 .take_while(|&&i| m.compared[i] == Compared::Other)
                 .count()
         };
-        // early: the points after the fold, nearest the fold first
-        let after: Vec<usize> = match c.direction {
-            SweepDirection::Up => (0..n).filter(|&i| c.omegas[i] >= wf).collect(),
-            SweepDirection::Down => (0..n).rev().filter(|&i| c.omegas[i] <= wf).collect(),
-        };
-        let early = after
-            .iter()
-            .take_while(|&&i| {
-                m.compared[i] != Compared::Other
-                    && (c.amplitudes[i] - af).abs() < (c.amplitudes[i] - model[i]).abs()
-            })
-            .count();
         let (a, b) = if late > 0 && late < before.len() {
             (before[late - 1], before[late])
-        } else if early > 0 && early < after.len() {
-            (after[early - 1], after[early])
+        } else if let Some(pair) = stayed_on_branch(c, m, model, (wf, af), true) {
+            pair
         } else {
             continue;
         };
@@ -2499,6 +2487,36 @@ fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, Identify
     Ok(best)
 }
 
+/// The points just after the model's fold (`(Ω_f, a_f)`) in sweep order
+/// that are nearer, in amplitude, to the end of the branch the model left
+/// than to the model state (`model`) — the measured sweep stayed on that
+/// branch — as the data indices of the last of them and the next point;
+/// `None` when there is none or every point after the fold is one. Points
+/// compared with another state never count; those compared with the
+/// branch end count when `fold_end_counts`.
+fn stayed_on_branch(
+    c: &Curve,
+    m: &CurveMatch,
+    model: &[f64],
+    (wf, af): (f64, f64),
+    fold_end_counts: bool,
+) -> Option<(usize, usize)> {
+    let n = c.omegas.len();
+    let after: Vec<usize> = match c.direction {
+        SweepDirection::Up => (0..n).filter(|&i| c.omegas[i] >= wf).collect(),
+        SweepDirection::Down => (0..n).rev().filter(|&i| c.omegas[i] <= wf).collect(),
+    };
+    let run = after
+        .iter()
+        .take_while(|&&i| {
+            (m.compared[i] == Compared::Sweep
+                || (fold_end_counts && m.compared[i] == Compared::FoldEnd))
+                && (c.amplitudes[i] - af).abs() < (c.amplitudes[i] - model[i]).abs()
+        })
+        .count();
+    (run > 0 && run < after.len()).then(|| (after[run - 1], after[run]))
+}
+
 /// Stage 8, escalation: other jump assignments. A point measured after the
 /// model's fold but nearer (in amplitude) to the end of the branch the
 /// model left than to the state it is compared with says that the sweep
@@ -2525,21 +2543,9 @@ fn reassign_jumps(
         let Some((wf, af)) = matches[ci].fold else {
             continue;
         };
-        let order: Vec<usize> = match c.direction {
-            SweepDirection::Up => (0..n).filter(|&i| c.omegas[i] >= wf).collect(),
-            SweepDirection::Down => (0..n).rev().filter(|&i| c.omegas[i] <= wf).collect(),
-        };
-        let run = order
-            .iter()
-            .take_while(|&&i| {
-                matches[ci].compared[i] == Compared::Sweep
-                    && (c.amplitudes[i] - af).abs() < (c.amplitudes[i] - model[i]).abs()
-            })
-            .count();
-        if run == 0 || run == order.len() {
+        let Some((last, next)) = stayed_on_branch(c, &matches[ci], model, (wf, af), false) else {
             continue;
-        }
-        let (last, next) = (order[run - 1], order[run]);
+        };
         let target = 0.5 * (c.omegas[last] + c.omegas[next]);
         let tol = 0.1 * (c.omegas[next] - c.omegas[last]).abs();
         if let Some(th) = move_fold(work, &moved, ci, target, tol)? {

@@ -45,6 +45,8 @@ enum Command {
     FitTime(cmd::fit_time::Args),
     /// Free-decay identification: Hilbert backbone, damping curve, averaged power-law fit.
     Decay(cmd::decay::Args),
+    /// What stepped-sine curves say before any fit: homogeneity, model-free stiffness and damping laws, the model to fit.
+    Inspect(cmd::inspect::Args),
     /// Fit several models to one data set and compare them (Tables 5-8 analogue).
     Compare(cmd::compare::Args),
     /// Estimate an FRF (H1, H2 with coherence, or spectral ratio) from input/output time histories.
@@ -219,6 +221,7 @@ fn main() {
         Command::Fit(a) => cmd::fit::run(a),
         Command::FitTime(a) => cmd::fit_time::run(a),
         Command::Decay(a) => cmd::decay::run(a),
+        Command::Inspect(a) => cmd::inspect::run(a),
         Command::Compare(a) if a.pr.phase_resonance => cmd::phase_resonance::run_compare_args(&a),
         Command::Compare(a) => cmd::compare::run(a),
         Command::FrfEstimate(a) => cmd::frf_estimate::run(a),

@@ -36,6 +36,7 @@ pub mod demo;
 pub mod figure_file;
 pub mod fit;
 pub mod frf_plot;
+pub mod inspect;
 pub mod landscape;
 pub mod linear_id;
 pub mod multi_harmonic;

@@ -9,6 +9,7 @@ pub mod frf;
 pub mod frf_estimate;
 pub mod frf_mhb;
 pub mod hb_error;
+pub mod inspect;
 pub mod linear_id;
 pub mod phase_resonance;
 pub mod progress;

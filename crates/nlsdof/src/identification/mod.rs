@@ -12,6 +12,9 @@
 //! * [`uncertainty`] — standard errors, 95 % intervals, correlations.
 //! * [`search`] — the stiffness sign and integer exponents, chosen by
 //!   fitting each candidate and keeping the lowest cost.
+//! * [`inspect`] — what stepped-sine data say before any fit: per-level
+//!   resonance, damping and jumps, homogeneity against the noise, the
+//!   backbone and damping power laws read model-free, a recommendation.
 //! * [`time_domain`] — output-error fit of Eq 32 to a recorded input and
 //!   output (its own parameter vector with gain, offsets, initial state).
 //!
@@ -25,6 +28,7 @@ pub mod equation_error;
 pub mod flags;
 pub mod global;
 pub mod identify;
+pub mod inspect;
 pub mod jumps;
 pub mod landscape;
 pub mod levenberg_marquardt;

@@ -353,7 +353,7 @@ fn read_options(
 /// The data argument of `fit`: `SteppedSineData`, a path, or a mapping of
 /// columns (`level`, `gamma`, `f_hz`, `amplitude`, optional `phase_deg`,
 /// `sweep`, `weight`), each a sequence or numpy array of one length.
-fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<(Dataset, Option<String>)> {
+pub(crate) fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<(Dataset, Option<String>)> {
     if let Ok(d) = obj.cast::<SteppedSineData>() {
         return Ok((d.get().inner.clone(), d.get().source.clone()));
     }

@@ -10,6 +10,7 @@
 mod arrays;
 mod convert;
 mod fit;
+mod inspect;
 mod model;
 mod signal;
 mod time;
@@ -45,6 +46,7 @@ fn _nlsdof(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(signal::compare_spectrograms, m)?)?;
     m.add_function(wrap_pyfunction!(time::decay, m)?)?;
     m.add_function(wrap_pyfunction!(time::fit_time, m)?)?;
+    m.add_function(wrap_pyfunction!(inspect::inspect, m)?)?;
     m.add_function(wrap_pyfunction!(uff::read_uff, m)?)?;
     m.add_function(wrap_pyfunction!(uff::write_uff, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

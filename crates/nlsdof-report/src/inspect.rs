@@ -362,7 +362,10 @@ pub fn inspect_figure(
             .series
             .push(Series::new(pts_out, colour(0), Style::Dots(4)).label("left out (early jump)"));
     }
-    if let Some(f) = &r.stiffness.fit {
+    // a law is drawn only where the levels determine its exponent (an
+    // exponent at the end of its range, fitted through the points, would
+    // read as a result)
+    if let Some(f) = r.stiffness.fit.as_ref().filter(|f| f.determined()) {
         let line: Vec<(f64, f64)> = (0..=120)
             .filter_map(|i| {
                 let a = amax * i as f64 / 120.0;
@@ -384,8 +387,13 @@ pub fn inspect_figure(
         .iter()
         .fold(f64::INFINITY, |m, p| m.min(p.velocity))
         * 0.9;
+    let drawn = r.damping.fit.as_ref().is_some_and(|f| f.determined());
     let mut damping = Panel::new(
-        "damping at resonance: delta_eq = gamma/(a_r Omega_r) (dots), power-law fit (line)",
+        if drawn {
+            "damping at resonance: delta_eq = gamma/(a_r Omega_r) (dots), power-law fit (line)"
+        } else {
+            "damping at resonance: delta_eq = gamma/(a_r Omega_r) (dots); eta not determined by these levels"
+        },
         "velocity amplitude V = Omega_r a_r [m/s]",
         "delta_eq [1/s]",
     );
@@ -406,7 +414,7 @@ pub fn inspect_figure(
             .series
             .push(Series::new(out, colour(0), Style::Dots(4)).label("left out (early jump)"));
     }
-    if let Some(f) = &r.damping.fit {
+    if let Some(f) = r.damping.fit.as_ref().filter(|f| f.determined()) {
         if vmax > 0.0 && vmin.is_finite() && vmin > 0.0 {
             let line: Vec<(f64, f64)> = (0..=120)
                 .map(|i| {

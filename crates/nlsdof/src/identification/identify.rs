@@ -2280,7 +2280,9 @@ fn move_fold_in(
 /// when the noise-scaled cost does not grow by more than one point's noise
 /// variance.
 fn pull_late_folds(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, IdentifyError> {
-    relocate_folds(setup, best, work, POLISH_ITERATIONS)
+    // a relocation that cannot be evaluated (a solve failing at a moved θ)
+    // leaves the fit as it was rather than failing it
+    Ok(relocate_folds(setup, best.clone(), work, POLISH_ITERATIONS).unwrap_or(best))
 }
 
 /// The folds of `best` that sit on the wrong side of a measured step moved

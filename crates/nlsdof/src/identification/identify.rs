@@ -2338,13 +2338,7 @@ fn relocate_folds(
         } else {
             continue;
         };
-        let target = 0.5 * (c.omegas[a] + c.omegas[b]);
-        let tol = 0.1 * (c.omegas[a] - c.omegas[b]).abs();
-        if let Some(th) = move_fold_in(work, &moved, ci, target, tol, true)? {
-            moved.spec = restarted(&moved.spec, &th);
-            moved.fit.theta = th;
-            any = true;
-        }
+        any |= move_fold_between(work, &mut moved, ci, (a, b), true)?;
     }
     if !any {
         return Ok(best);
@@ -2382,6 +2376,28 @@ fn relocate_folds(
     } else {
         Ok(best)
     }
+}
+
+/// `f`'s θ (and its start) moved so that the first fold of curve `ci` lies
+/// halfway between the measured steps `a` and `b` (within a tenth of that
+/// step), by [`move_fold_in`]; `false`, and `f` unchanged, when it cannot
+/// be moved there.
+fn move_fold_between(
+    work: &Dataset,
+    f: &mut Fitted,
+    ci: usize,
+    (a, b): (usize, usize),
+    least_misfit: bool,
+) -> Result<bool, IdentifyError> {
+    let w = &work.curves[ci].omegas;
+    let target = 0.5 * (w[a] + w[b]);
+    let tol = 0.1 * (w[a] - w[b]).abs();
+    let Some(th) = move_fold_in(work, f, ci, target, tol, least_misfit)? else {
+        return Ok(false);
+    };
+    f.spec = restarted(&f.spec, &th);
+    f.fit.theta = th;
+    Ok(true)
 }
 
 /// `M⁻¹g` for [`move_fold_in`]: `M = J_uᵀJ_u` of `f`'s residuals on `work`
@@ -2548,13 +2564,7 @@ fn reassign_jumps(
         let Some((last, next)) = stayed_on_branch(c, &matches[ci], model, (wf, af), false) else {
             continue;
         };
-        let target = 0.5 * (c.omegas[last] + c.omegas[next]);
-        let tol = 0.1 * (c.omegas[next] - c.omegas[last]).abs();
-        if let Some(th) = move_fold(work, &moved, ci, target, tol)? {
-            moved.spec = restarted(&moved.spec, &th);
-            moved.fit.theta = th;
-            any = true;
-        }
+        any |= move_fold_between(work, &mut moved, ci, (last, next), false)?;
     }
     if !any {
         return Ok(None);

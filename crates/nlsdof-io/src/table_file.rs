@@ -17,7 +17,7 @@
 //!   field must be a finite number; errors name the file, the line and the
 //!   field. Unselected columns are not parsed (they may be empty).
 
-use crate::csv_table::{CsvOptions, CsvRows, Encoding, Separator};
+use crate::csv_table::{CsvOptions, CsvReadError, CsvRows, Encoding, Separator};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -65,37 +65,170 @@ pub struct Table {
     pub columns: Vec<Vec<f64>>,
 }
 
+fn unquote(f: &str) -> &str {
+    f.trim_matches('"').trim()
+}
+
+/// The selected fields `idx` of one row (`unq` applied to each) appended
+/// to `columns`; errors name the line and the column.
+fn push_row(
+    columns: &mut [Vec<f64>],
+    idx: &[usize],
+    names: &[String],
+    path: &Path,
+    line: u64,
+    fields: &[String],
+    unq: fn(&str) -> &str,
+) -> Result<(), TableError> {
+    for (c, &i) in idx.iter().enumerate() {
+        let Some(f) = fields.get(i).map(|f| unq(f)) else {
+            return Err(TableError::ShortLine {
+                path: path.into(),
+                line,
+                column: names[i].clone(),
+                fields: fields.len(),
+            });
+        };
+        match parse_num(f) {
+            Some(v) => columns[c].push(v),
+            None => {
+                return Err(TableError::NotANumber {
+                    path: path.into(),
+                    line,
+                    column: names[i].clone(),
+                    field: f.to_string(),
+                })
+            }
+        }
+    }
+    Ok(())
+}
+
 fn parse_num(s: &str) -> Option<f64> {
     s.trim().parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
 /// Reads the columns `wanted` (names or 0-based indices) of a table file.
+///
+/// A regular file is streamed, never held whole (issue 30, class 10: a
+/// 1e7-row record of 240 MB was read into memory before 160 MB of numbers
+/// were parsed out of it): one pass over its lines finds the LabVIEW header
+/// blocks and counts the lines (the columns are reserved once, no doubling),
+/// a short pass finds the header line, and a last pass parses the rows.
+/// Anything that cannot be read twice (a pipe, a device) is read into
+/// memory first, as before.
 pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
-    let text = std::fs::read(path).map_err(|source| TableError::Read {
+    let read_err = |source| TableError::Read {
         path: path.into(),
         source,
-    })?;
-    parse_columns(&text, path, wanted)
+    };
+    if std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        parse_source(&|| std::fs::File::open(path), path, wanted)
+    } else {
+        let bytes = std::fs::read(path).map_err(read_err)?;
+        parse_columns(&bytes, path, wanted)
+    }
 }
 
 /// [`read_columns`] on bytes in memory (`path` names the data in errors).
 pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
-    if let Some(what) = crate::text::not_text(bytes) {
+    parse_source(&|| Ok(bytes), path, wanted)
+}
+
+const END_OF_HEADER: &str = "***End_of_Header***";
+
+/// Calls `f(index, line)` for the lines of `r` as `str::lines` splits the
+/// lossily decoded text (a leading byte-order mark dropped), until `f`
+/// returns `false`. `quick(bytes)` sees every line first and may say that
+/// `f` has nothing to do with it, without decoding it (the full pass over
+/// a large file).
+fn for_each_line<R: std::io::Read>(
+    r: R,
+    mut quick: impl FnMut(&[u8]) -> bool,
+    mut f: impl FnMut(usize, &str) -> bool,
+) -> std::io::Result<()> {
+    use std::io::BufRead;
+    let mut r = std::io::BufReader::with_capacity(1 << 16, r);
+    let mut buf = Vec::new();
+    let mut lines = 0;
+    loop {
+        buf.clear();
+        if r.read_until(b'\n', &mut buf)? == 0 {
+            break;
+        }
+        let i = lines;
+        lines += 1;
+        let mut line = &buf[..];
+        if let Some(l) = line.strip_suffix(b"\n") {
+            line = l.strip_suffix(b"\r").unwrap_or(l);
+        }
+        if !quick(line) {
+            continue;
+        }
+        let text = String::from_utf8_lossy(line);
+        let text = if i == 0 {
+            text.strip_prefix('\u{feff}').unwrap_or(&text)
+        } else {
+            &text
+        };
+        if !f(i, text) {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// The table from a source that can be opened again from its start: its
+/// first 4 KiB, its lines and its rows are read in separate passes, so at
+/// most a line and the parsed columns are in memory.
+fn parse_source<R: std::io::Read>(
+    open: &dyn Fn() -> std::io::Result<R>,
+    path: &Path,
+    wanted: &[&str],
+) -> Result<Table, TableError> {
+    let read_err = |source| TableError::Read {
+        path: path.into(),
+        source,
+    };
+    let mut head = Vec::with_capacity(4096);
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(open().map_err(read_err)?, 4096),
+        &mut head,
+    )
+    .map_err(read_err)?;
+    if let Some(what) = crate::text::not_text(&head) {
         return Err(TableError::NotText {
             path: path.into(),
             what,
         });
     }
-    let text = String::from_utf8_lossy(bytes);
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    drop(head);
     // LabVIEW .lvm: two header blocks, each ending with ***End_of_Header***
-    let skip = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| l.trim_start().starts_with("***End_of_Header***"))
-        .nth(1)
-        .map(|(i, _)| i + 1)
-        .unwrap_or(0);
+    // (this pass also counts the lines that are not blank or comments: at
+    // most that many rows, the columns' capacity)
+    let mut ends = 0;
+    let mut skip = 0;
+    let mut rows_max = 0usize;
+    for_each_line(
+        open().map_err(read_err)?,
+        |l| {
+            match l.iter().find(|b| !b.is_ascii_whitespace()) {
+                Some(b'#') | None => {}
+                Some(_) => rows_max += 1,
+            }
+            l.contains(&b'*')
+        },
+        |i, l| {
+            if ends < 2 && l.trim_start().starts_with(END_OF_HEADER) {
+                ends += 1;
+                if ends == 2 {
+                    skip = i + 1;
+                }
+            }
+            true
+        },
+    )
+    .map_err(read_err)?;
     // Polytec ASCII: the header is the line before a line of `[ unit ]` fields
     let is_units = |l: &str| {
         let f: Vec<&str> = l
@@ -109,26 +242,51 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
                 .all(|x| x.starts_with('[') && x.ends_with(']'))
             && f.iter().any(|x| !x.is_empty())
     };
-    let units = if skip == 0 {
-        text.lines().take(64).position(is_units).filter(|&u| u > 0)
-    } else {
-        None
-    };
+    let mut units = None;
+    if skip == 0 {
+        for_each_line(
+            open().map_err(read_err)?,
+            |_| true,
+            |i, l| {
+                if i < 64 && is_units(l) {
+                    units = Some(i);
+                }
+                i < 63 && units.is_none()
+            },
+        )
+        .map_err(read_err)?;
+        units = units.filter(|&u| u > 0);
+    }
     let skip = units.map_or(skip, |u| u - 1);
     // the first line that is not skipped decides the separator
-    let Some((first_no, first)) = text
-        .lines()
-        .enumerate()
-        .skip(skip)
-        .filter(|(i, _)| Some(*i) != units)
-        .map(|(i, l)| (i as u64 + 1, l.trim_end_matches('\r')))
-        .find(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-    else {
+    let mut first = None;
+    for_each_line(
+        open().map_err(read_err)?,
+        |_| true,
+        |i, l| {
+            let l = l.trim_end_matches('\r');
+            if i >= skip
+                && Some(i) != units
+                && !l.trim().is_empty()
+                && !l.trim_start().starts_with('#')
+            {
+                first = Some((
+                    i as u64 + 1,
+                    l.contains('\t'),
+                    l.contains(';'),
+                    l.contains(','),
+                ));
+            }
+            first.is_none()
+        },
+    )
+    .map_err(read_err)?;
+    let Some((first_no, tab, semicolon, comma)) = first else {
         return Err(TableError::Empty { path: path.into() });
     };
-    let separator = if first.contains('\t') {
+    let separator = if tab {
         Separator::Tab
-    } else if first.contains(';') && !first.contains(',') {
+    } else if semicolon && !comma {
         Separator::Semicolon
     } else {
         Separator::Comma
@@ -136,28 +294,37 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
     let opts = CsvOptions::default()
         .with_separator(separator)
         .with_encoding(Encoding::Utf8Lossy);
-    let mut rows = CsvRows::new(bytes, opts);
-    let unquote = |f: &str| f.trim_matches('"').trim().to_string();
-    // the rows from the first one on (header or data), without the units line
-    let mut next = || -> Option<(u64, Vec<String>)> {
-        loop {
-            // a byte slice cannot fail to read, and the encoding is lossy
-            let (line, fields) = rows.next_row().ok()??;
-            if line < first_no || Some(line as usize - 1) == units {
-                continue;
-            }
-            return Some((line, fields.iter().map(|f| unquote(f)).collect()));
-        }
+    let mut rows = CsvRows::new(open().map_err(read_err)?, opts);
+    // the encoding is lossy: only the source can fail
+    let row_err = |e: CsvReadError| match e {
+        CsvReadError::Io(source) => read_err(source),
+        e => read_err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            e.to_string(),
+        )),
     };
-    let Some((_, head)) = next() else {
+    // the rows from the first one on (header or data), without the units line
+    let data = |line: u64| line >= first_no && Some(line as usize - 1) != units;
+    let mut head = None;
+    while let Some((line, fields)) = rows.next_row().map_err(row_err)? {
+        if data(line) {
+            head = Some((
+                line,
+                fields
+                    .iter()
+                    .map(|f| unquote(f).to_string())
+                    .collect::<Vec<_>>(),
+            ));
+            break;
+        }
+    }
+    let Some((head_no, head)) = head else {
         return Err(TableError::Empty { path: path.into() });
     };
     let header = head.iter().any(|f| !f.is_empty() && parse_num(f).is_none());
-    let mut pending = None;
     let names: Vec<String> = if header {
         head.clone()
     } else {
-        pending = Some((first_no, head.clone()));
         (0..head.len()).map(|i| i.to_string()).collect()
     };
     let shown = || {
@@ -196,28 +363,18 @@ pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table
             }
         }
     }
-    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); wanted.len()];
-    while let Some((line, fields)) = pending.take().or_else(&mut next) {
-        for (c, &i) in idx.iter().enumerate() {
-            let Some(f) = fields.get(i) else {
-                return Err(TableError::ShortLine {
-                    path: path.into(),
-                    line,
-                    column: names[i].clone(),
-                    fields: fields.len(),
-                });
-            };
-            match parse_num(f) {
-                Some(v) => columns[c].push(v),
-                None => {
-                    return Err(TableError::NotANumber {
-                        path: path.into(),
-                        line,
-                        column: names[i].clone(),
-                        field: f.to_string(),
-                    })
-                }
-            }
+    // reserved once: a column never doubles its capacity (and copies
+    // itself) while it grows
+    let mut columns: Vec<Vec<f64>> = (0..wanted.len())
+        .map(|_| Vec::with_capacity(rows_max))
+        .collect();
+    if !header {
+        push_row(&mut columns, &idx, &names, path, head_no, &head, |f| f)?;
+    }
+    // the fields are parsed where they are, not copied (1e7 rows)
+    while let Some((line, fields)) = rows.next_row().map_err(row_err)? {
+        if data(line) {
+            push_row(&mut columns, &idx, &names, path, line, fields, unquote)?;
         }
     }
     if columns.first().map(|c| c.is_empty()).unwrap_or(true) {

@@ -112,14 +112,25 @@ pub fn run(a: Args) -> Result<(), CliError> {
                     got = Some(t);
                     break;
                 }
+                // this time column is not there: try the next one (no
+                // second pass over the file for the response column, which
+                // was found first; issue 30, class 10)
+                Err(e @ nlsdof_io::table_file::TableError::MissingColumn { .. }) if !matches!(&e, nlsdof_io::table_file::TableError::MissingColumn { wanted, .. } if wanted == a.column.trim()) =>
+                {
+                    last_err = Some(e);
+                }
                 Err(e) => {
-                    // a missing response column is the error to report
+                    // a missing or bad response column is the error to report
                     if let Err(e2) = read_columns(&a.input, &[a.column.as_str()]) {
                         return Err(e2.into());
                     }
                     last_err = Some(e);
                 }
             }
+        }
+        if got.is_none() {
+            // the response column's own error, if it has one, comes first
+            read_columns(&a.input, &[a.column.as_str()])?;
         }
         let Some(t) = got else {
             return Err(match (a.time_column.is_some(), last_err) {

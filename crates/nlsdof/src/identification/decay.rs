@@ -9,7 +9,10 @@
 //!    (`[0.5, 1.5] × f_peak`, f_peak = the spectrum's largest bin, which
 //!    excludes the odd harmonics of a Duffing-type response) or given. End
 //!    effects: the filter's transient lasts about `1/(f2 − f1)`, so
-//!    `max(3 cycles, 2/(f2 − f1))` are trimmed at both ends.
+//!    `max(3 cycles, 2/(f2 − f1))` are trimmed at both ends. A record
+//!    longer than 2^19 samples is filtered the same way in overlapping
+//!    blocks (overlap-save, [`ANALYTIC_BLOCK`]), so memory stays near the
+//!    record's own size (issue 30, class 10).
 //! 2. **Instantaneous amplitude and frequency** `a = |z|`,
 //!    `f = (1/2π) dφ/dt` (central differences of the unwrapped phase).
 //! 3. **Backbone and damping curve**: amplitude bins (log-spaced between the
@@ -45,7 +48,7 @@
 use super::levenberg_marquardt::{
     cholesky_solve, minimise, normal_equations, LeastSquares, LmOptions,
 };
-use super::time_domain::{simulate_output, TimeModel};
+use super::time_domain::{simulate_states, Discretisation, TimeModel};
 use super::uncertainty::t95;
 use crate::model::NormalisedModel;
 use crate::power_law::g_unchecked;
@@ -175,59 +178,180 @@ impl DecayAnalysis {
     }
 }
 
-/// Analytic signal of `x` (mean removed) restricted to the band `[f1, f2]` Hz.
-pub fn analytic_signal(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>> {
+/// Largest FFT of the analytic signal computed in one piece: 2^20 points
+/// (16 MiB, and as much scratch). A longer record is filtered in
+/// overlapping blocks (issue 30, class 10: the one FFT of a 1e7-sample
+/// record, zero-padded to 2^25 points, took 512 MiB, twice over with its
+/// scratch).
+pub const ANALYTIC_BLOCK: usize = 1 << 20;
+
+/// The analytic signal of `x` (mean removed) restricted to the band
+/// `[f1, f2]` Hz, handed to `out` in consecutive pieces that cover the
+/// record in order.
+///
+/// A record with `(2N).next_power_of_two() <= `[`ANALYTIC_BLOCK`] (N up to
+/// 2^19) is one piece: the whole record zero-padded to a power of two
+/// >= 2N, as always. A longer one is filtered block by block (overlap-save)
+/// with the same mask on a grid of `L >= ANALYTIC_BLOCK` points: each block
+/// keeps its middle half and reads a quarter block (`L/4 >= 100 fs/edge`,
+/// a hundred time scales of the raised-cosine edge) either side. The
+/// filter's impulse response falls off as `1/t³` beyond `fs/edge`, so the
+/// blocks differ from the single FFT only by that tail (relative 1e-6 or
+/// less of the envelope).
+fn analytic_pieces(x: &[f64], fs: f64, band: (f64, f64), out: &mut dyn FnMut(&[Complex<f64>])) {
     let n = x.len();
+    let zero = Complex::new(0.0, 0.0);
     let mean = x.iter().sum::<f64>() / n.max(1) as f64;
     let m = (2 * n).next_power_of_two();
-    let mut buf: Vec<Complex<f64>> = x
-        .iter()
-        .map(|&v| Complex::new(v - mean, 0.0))
-        .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
-        .take(m)
-        .collect();
-    let mut planner = FftPlanner::<f64>::new();
-    planner.plan_fft_forward(m).process(&mut buf);
-    let df = fs / m as f64;
     // raised-cosine edges (10 % of the band each side, inside the band):
     // a brick-wall mask would ring for the whole record (sinc tails ~1/t)
     let edge = 0.1 * (band.1 - band.0);
-    for (k, c) in buf.iter_mut().enumerate() {
-        let f = k as f64 * df;
-        let w = if k == 0 || k >= m / 2 || f < band.0 || f > band.1 {
-            0.0
-        } else {
-            let d = (f - band.0).min(band.1 - f);
-            if d >= edge {
-                1.0
+    let reach = 4.0 * 100.0 * fs / edge;
+    let block = if reach.is_finite() && reach > 0.0 && reach < (1u64 << 40) as f64 {
+        (reach.ceil() as usize)
+            .next_power_of_two()
+            .max(ANALYTIC_BLOCK)
+    } else {
+        usize::MAX
+    };
+    // (FFT length, samples read before the kept part, samples kept)
+    let (len, lead, keep) = if m <= block {
+        (m, 0, n)
+    } else {
+        (block, block / 4, block / 2)
+    };
+    let mut planner = FftPlanner::<f64>::new();
+    let forward = planner.plan_fft_forward(len);
+    let inverse = planner.plan_fft_inverse(len);
+    let mut scratch = vec![
+        zero;
+        forward
+            .get_inplace_scratch_len()
+            .max(inverse.get_inplace_scratch_len())
+    ];
+    let mut buf = vec![zero; len];
+    let df = fs / len as f64;
+    let mut s = 0;
+    while s < n {
+        // samples s - lead .. s - lead + len, zero outside the record
+        for (j, c) in buf.iter_mut().enumerate() {
+            *c = match (s + j).checked_sub(lead) {
+                Some(t) if t < n => Complex::new(x[t] - mean, 0.0),
+                _ => zero,
+            };
+        }
+        forward.process_with_scratch(&mut buf, &mut scratch);
+        for (k, c) in buf.iter_mut().enumerate() {
+            let f = k as f64 * df;
+            let w = if k == 0 || k >= len / 2 || f < band.0 || f > band.1 {
+                0.0
             } else {
-                0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
-            }
-        };
-        *c *= 2.0 * w / m as f64;
+                let d = (f - band.0).min(band.1 - f);
+                if d >= edge {
+                    1.0
+                } else {
+                    0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
+                }
+            };
+            *c *= 2.0 * w / len as f64;
+        }
+        inverse.process_with_scratch(&mut buf, &mut scratch);
+        out(&buf[lead..lead + keep.min(n - s)]);
+        s += keep;
     }
-    planner.plan_fft_inverse(m).process(&mut buf);
-    buf.truncate(n);
-    buf
 }
 
+/// Analytic signal of `x` (mean removed) restricted to the band `[f1, f2]` Hz
+/// (see [`analytic_pieces`] for records longer than 2^19 samples).
+pub fn analytic_signal(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>> {
+    let mut z = Vec::with_capacity(x.len());
+    analytic_pieces(x, fs, band, &mut |p| z.extend_from_slice(p));
+    z
+}
+
+/// The frequency of the largest bin of the spectrum of `x` (mean removed,
+/// zero-padded to a power of two `M`).
+///
+/// Computed in `O(M/2)` memory rather than three times that (issue 30,
+/// class 10: one complex FFT of 2^24 points at 1e7 samples took 256 MiB,
+/// as much scratch and as many twiddle factors). The record is real, so its
+/// spectrum comes from the `h = M/2`-point FFT `Z` of the even and odd
+/// samples packed as real and imaginary parts; that FFT is done in four
+/// steps (`h = n1 n2`: `n2` FFTs of `n1` points over strided samples,
+/// twiddles, `n1` FFTs of `n2` points), which needs one `h`-point
+/// intermediate and small plans; the last FFTs give `Z` column by column,
+/// and each bin's power is taken there, never stored.
 fn peak_frequency(x: &[f64], fs: f64) -> f64 {
     let n = x.len();
-    let m = n.next_power_of_two();
+    let m = n.next_power_of_two().max(4);
+    let h = m / 2;
     let mean = x.iter().sum::<f64>() / n as f64;
-    let mut buf: Vec<Complex<f64>> = x
-        .iter()
-        .map(|&v| Complex::new(v - mean, 0.0))
-        .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
-        .take(m)
-        .collect();
-    FftPlanner::<f64>::new()
-        .plan_fft_forward(m)
-        .process(&mut buf);
-    let k = (1..m / 2)
-        .max_by(|&a, &b| buf[a].norm_sqr().total_cmp(&buf[b].norm_sqr()))
-        .unwrap_or(1);
-    k as f64 * fs / m as f64
+    let at = |t: usize| if t < n { x[t] - mean } else { 0.0 };
+    let zero = Complex::new(0.0, 0.0);
+    let n1 = 1usize << (h.trailing_zeros() / 2);
+    let n2 = h / n1;
+    let mut planner = FftPlanner::<f64>::new();
+    let (f1, f2) = (planner.plan_fft_forward(n1), planner.plan_fft_forward(n2));
+    let mut scratch = vec![
+        zero;
+        f1.get_inplace_scratch_len()
+            .max(f2.get_inplace_scratch_len())
+    ];
+    let twiddle = |j: usize, k: usize| {
+        let (sin, cos) = (-TWO_PI * ((j * k) % h) as f64 / h as f64).sin_cos();
+        Complex::new(cos, sin)
+    };
+    // step 1: a[j2 n1 + k1] = w_h^(j2 k1) FFT_n1(p[n2 j1 + j2] over j1)[k1]
+    let mut a = vec![zero; h];
+    for j2 in 0..n2 {
+        let row = &mut a[j2 * n1..(j2 + 1) * n1];
+        for (j1, c) in row.iter_mut().enumerate() {
+            let j = n2 * j1 + j2;
+            *c = Complex::new(at(2 * j), at(2 * j + 1));
+        }
+        f1.process_with_scratch(row, &mut scratch);
+        for (k1, c) in row.iter_mut().enumerate() {
+            *c *= twiddle(j2, k1);
+        }
+    }
+    // step 2: Z[k1 + n1 k2] = FFT_n2(a[j2 n1 + k1] over j2)[k2], for the
+    // columns k1 and n1 - k1 together: X[k] needs Z[k] and Z[h - k]
+    let column = |k1: usize, out: &mut Vec<Complex<f64>>, scratch: &mut Vec<Complex<f64>>| {
+        out.clear();
+        out.extend((0..n2).map(|j2| a[j2 * n1 + k1]));
+        f2.process_with_scratch(out, scratch);
+    };
+    let (mut c, mut d) = (Vec::with_capacity(n2), Vec::with_capacity(n2));
+    let mut best = (1, f64::NEG_INFINITY);
+    for k1 in 0..=n1 / 2 {
+        let k1r = (n1 - k1) % n1;
+        column(k1, &mut c, &mut scratch);
+        column(k1r, &mut d, &mut scratch);
+        for (col, other, kk1) in [(&c, &d, k1), (&d, &c, k1r)] {
+            for k2 in 0..n2 {
+                let k = kk1 + n1 * k2;
+                if k == 0 || k >= h {
+                    continue;
+                }
+                // Z[h - k] is in the other column
+                let r = h - k;
+                let zr = other[r / n1];
+                debug_assert_eq!(r % n1, (n1 - kk1) % n1);
+                // X[k] = E[k] + e^(-2πik/M) O[k], the spectra of the even and odd
+                // samples E = (Z[k] + conj Z[h-k]) / 2, O = (Z[k] - conj Z[h-k]) / 2i
+                let (za, zb) = (col[k2], zr.conj());
+                let even = (za + zb) * 0.5;
+                let odd = (za - zb) * Complex::new(0.0, -0.5);
+                let (sin, cos) = (-TWO_PI * k as f64 / m as f64).sin_cos();
+                let p = (even + Complex::new(cos, sin) * odd).norm_sqr();
+                // the last of equal maxima, as `max_by` over k
+                if p > best.1 || (p == best.1 && k > best.0) {
+                    best = (k, p);
+                }
+            }
+        }
+    }
+    best.0 as f64 * fs / m as f64
 }
 
 /// `y = c0 + c1 · φ(a)` over a grid of the exponent `p` with `φ = g(p) s^p`,
@@ -391,12 +515,39 @@ fn fit_power(
     })
 }
 
-/// Envelope with the trimmed ends of the analytic signal.
+/// Envelope `|z|` of the analytic signal (no complex copy of the record).
 fn envelope(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<f64> {
-    analytic_signal(x, fs, band)
-        .iter()
-        .map(|c| c.norm())
-        .collect()
+    let mut env = Vec::with_capacity(x.len());
+    analytic_pieces(x, fs, band, &mut |p| env.extend(p.iter().map(|c| c.norm())));
+    env
+}
+
+/// The model's simulated free decay from `(x0, 0)`: `n` samples of
+/// [`simulate_states`] with zero input, computed in pieces of 2^16 samples,
+/// each started from the state the previous one ended in. The steps are
+/// those of one call (the input is zero throughout and the state carries
+/// over exactly), without an `n`-sample zero input and its upsampled copy
+/// in memory (issue 30, class 10). `None` if the simulation fails.
+fn free_decay(tm: &TimeModel, n: usize, fs: f64, x0: f64) -> Option<Vec<f64>> {
+    const PIECE: usize = 1 << 16;
+    let zeros = vec![0.0; PIECE + 1];
+    let mut y = Vec::with_capacity(n);
+    let mut state = State { x: x0, v: 0.0 };
+    while y.len() < n {
+        let k = (n - y.len()).min(PIECE);
+        // one sample more than kept, except at the end: the next start
+        let steps = if y.len() + k < n { k + 1 } else { k };
+        let (ys, vs) =
+            simulate_states(tm, &zeros[..steps], fs, state, &Discretisation::default()).ok()?;
+        y.extend_from_slice(&ys[..k]);
+        if steps > k {
+            state = State {
+                x: ys[k] - tm.output_offset,
+                v: vs[k],
+            };
+        }
+    }
+    Some(y)
 }
 
 /// The free-decay analysis of a record `x` sampled at `fs` (see the module
@@ -475,8 +626,14 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
             min: 2 * trim + 64,
         });
     }
-    let z = analytic_signal(seg, fs, band);
-    let amp_all: Vec<f64> = z.iter().map(|c| c.norm()).collect();
+    // envelope and phase of the analytic signal: two real vectors, filled
+    // piece by piece, no complex copy of the record (issue 30, class 10)
+    let mut amp_all = Vec::with_capacity(seg.len());
+    let mut phase = Vec::with_capacity(seg.len());
+    analytic_pieces(seg, fs, band, &mut |p| {
+        amp_all.extend(p.iter().map(|c| c.norm()));
+        phase.extend(p.iter().map(|c| c.arg()));
+    });
     // analysed range: after the leading trim, until the envelope reaches
     // 3x the noise floor (median of the last 10 %) or the trailing trim
     let tail = &amp_all[amp_all.len() - amp_all.len() / 10..];
@@ -495,30 +652,40 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
             end: end_amp,
         });
     }
-    let amplitude: Vec<f64> = amp_all[trim..stop].to_vec();
-    let phase: Vec<f64> = z[trim.saturating_sub(1)..(stop + 1).min(z.len())]
-        .iter()
-        .map(|c| c.arg())
-        .collect();
-    let mut unwrapped = Vec::with_capacity(phase.len());
+    // the analysed range of both, cut in place (shrinking returns the rest)
+    let mut amplitude = amp_all;
+    amplitude.truncate(stop);
+    amplitude.drain(..trim);
+    amplitude.shrink_to_fit();
+    phase.truncate(stop + 1);
+    phase.drain(..trim.saturating_sub(1));
+    // unwrapped in place
     let mut off = 0.0;
-    for (i, &p) in phase.iter().enumerate() {
+    let mut prev = 0.0;
+    for (i, p) in phase.iter_mut().enumerate() {
+        let raw = *p;
         if i > 0 {
-            let d = p - phase[i - 1];
+            let d = raw - prev;
             if d > std::f64::consts::PI {
                 off -= TWO_PI;
             } else if d < -std::f64::consts::PI {
                 off += TWO_PI;
             }
         }
-        unwrapped.push(p + off);
+        prev = raw;
+        *p = raw + off;
     }
-    let f_hz: Vec<f64> = (0..amplitude.len())
-        .map(|k| {
-            let (a, b) = (k, (k + 2).min(unwrapped.len() - 1));
-            (unwrapped[b] - unwrapped[a]) * fs / ((b - a) as f64 * TWO_PI)
-        })
-        .collect();
+    // instantaneous frequency in place: f[k] needs the phase at k and k + 2
+    // only (trim >= 1, so the phase has two samples more than the
+    // amplitude and k + 2 is never overwritten before it is read)
+    let mut f_hz = phase;
+    let last_phase = f_hz.len() - 1;
+    for k in 0..amplitude.len() {
+        let (a, b) = (k, (k + 2).min(last_phase));
+        f_hz[k] = (f_hz[b] - f_hz[a]) * fs / ((b - a) as f64 * TWO_PI);
+    }
+    f_hz.truncate(amplitude.len());
+    f_hz.shrink_to_fit();
     // amplitude bins
     let amax = amplitude.iter().cloned().fold(0.0, f64::max);
     let amin = amplitude.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -528,28 +695,43 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     for b in 0..nb {
         let lo = (la + (lb - la) * b as f64 / nb as f64).exp();
         let hi = (la + (lb - la) * (b + 1) as f64 / nb as f64).exp();
-        let idx: Vec<usize> = (0..amplitude.len())
-            .filter(|&k| amplitude[k] >= lo && (amplitude[k] < hi || (b == nb - 1)))
-            .collect();
+        // the bin's samples, in order, in two passes (means, then the
+        // slope) rather than a list of their indices (up to the record)
+        let bin = || {
+            (0..amplitude.len())
+                .filter(|&k| amplitude[k] >= lo && (amplitude[k] < hi || (b == nb - 1)))
+        };
+        let (mut count, mut first, mut last) = (0usize, 0usize, 0usize);
+        let (mut st, mut sl, mut sf) = (0.0, 0.0, 0.0);
+        for k in bin() {
+            if count == 0 {
+                first = k;
+            }
+            last = k;
+            count += 1;
+            st += k as f64 / fs;
+            sl += amplitude[k].ln();
+            sf += f_hz[k];
+        }
         // at least two cycles in the bin
-        let span = idx.last().zip(idx.first()).map(|(l, f)| l - f).unwrap_or(0);
-        if idx.len() < 8 || (span as f64) < 2.0 * fs / fc {
+        let span = last - first;
+        if count < 8 || (span as f64) < 2.0 * fs / fc {
             continue;
         }
-        let m = idx.len() as f64;
-        let tm = idx.iter().map(|&k| k as f64 / fs).sum::<f64>() / m;
-        let lm = idx.iter().map(|&k| amplitude[k].ln()).sum::<f64>() / m;
+        let m = count as f64;
+        let tm = st / m;
+        let lm = sl / m;
         let (mut sxy, mut sxx) = (0.0, 0.0);
-        for &k in &idx {
+        for k in bin() {
             let dt = k as f64 / fs - tm;
             sxy += dt * (amplitude[k].ln() - lm);
             sxx += dt * dt;
         }
         backbone.push(DecayPoint {
             amplitude: lm.exp(),
-            f_hz: idx.iter().map(|&k| f_hz[k]).sum::<f64>() / m,
+            f_hz: sf / m,
             decay_rate: -sxy / sxx,
-            samples: idx.len(),
+            samples: count,
         });
     }
     // a free decay only falls: drop the few bins a noisy tail may raise,
@@ -598,21 +780,17 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
             input_offset: 0.0,
             output_offset: 0.0,
         };
-        let zeros = vec![0.0; len + 2 * trim];
-        if let Ok(sim) = simulate_output(
-            &tm,
-            &zeros,
-            fs,
-            State {
-                x: res.amplitude[0],
-                v: 0.0,
-            },
-        ) {
+        if let Some(sim) = free_decay(&tm, len + 2 * trim, fs, res.amplitude[0]) {
             // pad before the start with the same oscillation backwards is
             // not available: analyse the simulated decay from its start and
-            // compare from sample 0 (the simulated decay starts at a0)
-            let env = envelope(&sim, fs, band);
-            let m = env[..len].to_vec();
+            // compare from sample 0 (the simulated decay starts at a0);
+            // only the first `len` samples of its envelope are kept
+            let mut m = Vec::with_capacity(len);
+            analytic_pieces(&sim, fs, band, &mut |p| {
+                let k = (len - m.len()).min(p.len());
+                m.extend(p[..k].iter().map(|c| c.norm()));
+            });
+            drop(sim);
             let scale = res.amplitude.iter().cloned().fold(0.0, f64::max);
             let skip = trim.min(len / 4);
             let err = (m[skip..]
@@ -633,6 +811,136 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The analytic signal as one FFT of the whole record zero-padded to
+    /// `(2N).next_power_of_two()` points: the computation before issue 30's
+    /// class 10, the reference of the block-wise one.
+    fn one_fft_analytic(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>> {
+        let n = x.len();
+        let mean = x.iter().sum::<f64>() / n as f64;
+        let m = (2 * n).next_power_of_two();
+        let mut buf: Vec<Complex<f64>> = x
+            .iter()
+            .map(|&v| Complex::new(v - mean, 0.0))
+            .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
+            .take(m)
+            .collect();
+        let mut planner = FftPlanner::<f64>::new();
+        planner.plan_fft_forward(m).process(&mut buf);
+        let df = fs / m as f64;
+        let edge = 0.1 * (band.1 - band.0);
+        for (k, c) in buf.iter_mut().enumerate() {
+            let f = k as f64 * df;
+            let w = if k == 0 || k >= m / 2 || f < band.0 || f > band.1 {
+                0.0
+            } else {
+                let d = (f - band.0).min(band.1 - f);
+                if d >= edge {
+                    1.0
+                } else {
+                    0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
+                }
+            };
+            *c *= 2.0 * w / m as f64;
+        }
+        planner.plan_fft_inverse(m).process(&mut buf);
+        buf.truncate(n);
+        buf
+    }
+
+    fn decaying_sine(n: usize, fs: f64, f: f64, rate: f64) -> Vec<f64> {
+        (0..n)
+            .map(|k| {
+                let t = k as f64 / fs;
+                (-rate * t).exp() * (TWO_PI * f * t).sin() + 0.01 * (TWO_PI * 3.1 * f * t).sin()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn short_records_are_one_fft_bit_for_bit() {
+        // up to 2^19 samples nothing changed (issue 30, class 10)
+        for n in [64, 1000, 4097, 1 << 19] {
+            let x = decaying_sine(n, 1000.0, 37.0, 0.5);
+            assert_eq!(
+                analytic_signal(&x, 1000.0, (18.0, 55.0)),
+                one_fft_analytic(&x, 1000.0, (18.0, 55.0)),
+                "{n}"
+            );
+        }
+    }
+
+    #[test]
+    fn blocks_match_the_one_fft() {
+        // 2^19 + 1 samples: (2N).next_power_of_two() = 2^21 > ANALYTIC_BLOCK
+        let (fs, n) = (2000.0, (1 << 19) + 1);
+        let x = decaying_sine(n, fs, 37.0, 0.02);
+        let band = (18.5, 55.5);
+        let reference = one_fft_analytic(&x, fs, band);
+        let mut pieces = 0;
+        let mut z = Vec::new();
+        analytic_pieces(&x, fs, band, &mut |p| {
+            pieces += 1;
+            z.extend_from_slice(p)
+        });
+        assert!(pieces > 1, "{pieces} piece(s)");
+        assert_eq!(z.len(), n);
+        let scale = reference.iter().fold(0.0f64, |a, c| a.max(c.norm()));
+        let worst = z
+            .iter()
+            .zip(&reference)
+            .fold(0.0f64, |a, (u, v)| a.max((u - v).norm()));
+        assert!(worst < 1e-9 * scale, "{worst:e} of {scale}");
+    }
+
+    #[test]
+    fn peak_frequency_is_the_largest_bin_of_the_full_spectrum() {
+        for (n, fs, f) in [
+            (100, 100.0, 7.3),
+            (5000, 1000.0, 37.0),
+            (300_001, 10_000.0, 123.4),
+        ] {
+            let x = decaying_sine(n, fs, f, 0.3);
+            let m = n.next_power_of_two();
+            let mean = x.iter().sum::<f64>() / n as f64;
+            let mut buf: Vec<Complex<f64>> = (0..m)
+                .map(|t| Complex::new(if t < n { x[t] - mean } else { 0.0 }, 0.0))
+                .collect();
+            FftPlanner::<f64>::new()
+                .plan_fft_forward(m)
+                .process(&mut buf);
+            let k = (1..m / 2)
+                .max_by(|&a, &b| buf[a].norm_sqr().total_cmp(&buf[b].norm_sqr()))
+                .unwrap();
+            assert_eq!(peak_frequency(&x, fs), k as f64 * fs / m as f64, "{n}");
+        }
+    }
+
+    #[test]
+    fn the_free_decay_in_pieces_is_one_simulation() {
+        let tm = TimeModel {
+            model: NormalisedModel {
+                alpha: (TWO_PI * 37.0).powi(2),
+                beta: 1e4,
+                rho: 2.0,
+                delta: 0.5,
+                kappa: 0.3,
+                eta: 1.0,
+            },
+            gain: 0.0,
+            input_offset: 0.0,
+            output_offset: 0.0,
+        };
+        let (fs, n) = (1000.0, 3 * (1 << 16) + 5);
+        let one = super::super::time_domain::simulate_output(
+            &tm,
+            &vec![0.0; n],
+            fs,
+            State { x: 0.8, v: 0.0 },
+        )
+        .unwrap();
+        assert_eq!(free_decay(&tm, n, fs, 0.8).unwrap(), one);
+    }
 
     #[test]
     fn analytic_signal_of_a_sine() {

@@ -14,6 +14,8 @@
 //! input_gain = 1.0        # the model sees gamma = input_gain * (u + input_offset)
 //! input_offset = 0.0      # in the input's unit
 //! output_offset = 0.0     # y = x + output_offset, in the output's unit
+//! input_interpolation = "cubic"  # optional: u between samples, cubic | linear | zoh
+//! substeps = 8            # optional: RK4 steps per sample (h = 1/(substeps fs))
 //! [provenance]            # optional: where the model came from (information only)
 //! tool = "nlsdof fit"
 //! version = "0.1.0"
@@ -35,6 +37,12 @@
 //!   levels `gamma` being the measured ones), `nlsdof fit-time --out` the
 //!   gain and both offsets of a time-domain fit. `simulate` applies all three
 //!   (`gamma = input_gain (u + input_offset)`, column `y = x + output_offset`).
+//!   `input_interpolation` states how the recorded input is reconstructed
+//!   between samples — part of a time-domain model — and `substeps` the RK4
+//!   steps per sample the fit integrated with (chosen to make the
+//!   integration error negligible); `simulate`'s default RK4 uses both.
+//!   Without them: cubic input and 2 substeps (`h = 1/(2 fs)`), the
+//!   behaviour of files written before they existed.
 //!   The steady-state commands (`roots`, `frf`, `hb-error`, `stepped-sine`)
 //!   and Python's `sweep`, `steady_states`, `hb_error` and `stepped_sine`
 //!   apply `input_gain` to the levels given and refuse a file with a
@@ -108,6 +116,14 @@ pub struct Provenance {
     /// The sample range fitted (`start:end`, time-domain fits).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub range: Option<String>,
+    /// Time-domain fits: the RK4 step, s (`1/(substeps fs)`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integration_step: Option<f64>,
+    /// Time-domain fits: the estimated integration error of the fitted
+    /// output (RMS change when the substeps are doubled), output unit; to
+    /// compare with `cost`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integration_error: Option<f64>,
 }
 
 /// Everything a model file holds: the model, the optional signal map and
@@ -161,6 +177,14 @@ pub struct SignalMap {
     pub input_offset: f64,
     #[serde(default)]
     pub output_offset: f64,
+    /// How `u` is reconstructed between samples (`None`: cubic, the
+    /// default of files that do not state it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_interpolation: Option<nlsdof::excitation::InputInterpolation>,
+    /// RK4 steps per sample interval the model was fitted with (`None`:
+    /// 2, `h = 1/(2 fs)`); 1..=256.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub substeps: Option<usize>,
 }
 
 fn one() -> f64 {
@@ -185,6 +209,16 @@ impl SignalMap {
                 "signal.input_gain",
                 "signal.input_gain = 0 would disconnect the input".into(),
             ));
+        }
+        if let Some(n) = self.substeps {
+            if !(1..=256).contains(&n) {
+                return Err((
+                    "signal.substeps",
+                    format!(
+                        "signal.substeps = {n} must be between 1 and 256 (RK4 steps per sample)"
+                    ),
+                ));
+            }
         }
         Ok(())
     }
@@ -220,6 +254,8 @@ impl Default for SignalMap {
             input_gain: 1.0,
             input_offset: 0.0,
             output_offset: 0.0,
+            input_interpolation: None,
+            substeps: None,
         }
     }
 }
@@ -341,10 +377,20 @@ pub fn read_model_with_signal(path: &Path) -> Result<(Model, Option<SignalMap>),
 
 /// The `[signal]` table as TOML text (appended to [`model_to_toml`]).
 pub fn signal_to_toml(s: &SignalMap) -> String {
-    format!(
+    let mut t = format!(
         "\n[signal]                # recorded signals <-> model\ninput_gain = {:?}      # gamma = input_gain * (u + input_offset)\ninput_offset = {:?}    # input unit\noutput_offset = {:?}   # y = x + output_offset, output unit\n",
         s.input_gain, s.input_offset, s.output_offset
-    )
+    );
+    if let Some(i) = s.input_interpolation {
+        t += &format!(
+            "input_interpolation = \"{}\"   # u between samples (part of the model): cubic | linear | zoh\n",
+            i.name()
+        );
+    }
+    if let Some(n) = s.substeps {
+        t += &format!("substeps = {n}          # RK4 steps per sample, h = 1/(substeps fs)\n");
+    }
+    t
 }
 
 /// The `[signal]` table of a stepped-sine fit: its forcing gain only.
@@ -408,6 +454,7 @@ mod tests {
             input_gain: 2.5,
             input_offset: -0.003,
             output_offset: 0.0008,
+            ..SignalMap::default()
         };
         let full = model_to_toml(&m) + &signal_to_toml(&map);
         let (m2, s2) = parse_model_with_signal(&full, Path::new("b.toml")).unwrap();
@@ -441,6 +488,8 @@ mod tests {
                 input_gain: -1.77,
                 input_offset: 3.1e-4,
                 output_offset: -2.0e-5,
+                input_interpolation: Some(nlsdof::excitation::InputInterpolation::Zoh),
+                substeps: Some(8),
             }),
             provenance: Some(Provenance {
                 tool: Some("nlsdof fit".into()),
@@ -451,6 +500,8 @@ mod tests {
                 cost: Some(1.234_567_890_123_4e-9),
                 converged: Some(false),
                 range: Some("40650:105712".into()),
+                integration_step: Some(1.0 / 4882.8125),
+                integration_error: Some(2.5e-6),
             }),
         };
         let again = parse_document(&doc.to_toml(), Path::new("r.toml")).unwrap();
@@ -492,6 +543,8 @@ mod tests {
             ("[signal]\ninput_offset = -inf\n", "signal.input_offset"),
             ("[signal]\noutput_offset = nan\n", "signal.output_offset"),
             ("[signal]\ninput_gain = 0.0\n", "signal.input_gain"),
+            ("[signal]\nsubsteps = 0\n", "signal.substeps"),
+            ("[signal]\ninput_interpolation = \"spline\"\n", "spline"),
             ("[provenance]\ncost = -1.0\n", "provenance.cost"),
             ("[provenance]\ncost = nan\n", "provenance.cost"),
             ("[provenance]\nwho = \"me\"\n", "who"),

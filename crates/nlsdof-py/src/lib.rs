@@ -13,6 +13,7 @@ mod fit;
 mod inspect;
 mod model;
 mod signal;
+mod simulation;
 mod time;
 mod uff;
 
@@ -35,6 +36,7 @@ fn _nlsdof(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Sweep>()?;
     m.add_class::<model::HarmonicSweep>()?;
     m.add_class::<model::RigSweep>()?;
+    m.add_class::<simulation::Simulation>()?;
     m.add_class::<fit::SteppedSineData>()?;
     m.add_class::<fit::FitResult>()?;
     m.add_function(wrap_pyfunction!(fit::read_stepped_sine, m)?)?;

@@ -4,18 +4,20 @@
 
 use crate::arrays::{f64_array, values};
 use crate::convert::{to_py, value_error};
+use crate::simulation::Simulation;
+use nlsdof::identification::time_domain::{
+    doubled_substeps_difference, simulate_states, Discretisation, InputInterpolation, TimeModel,
+    MAX_SUBSTEPS,
+};
 use nlsdof::simulation::{simulate_record, RecordMethod, Sample, State};
 use nlsdof::stepped_sine::{run_sweeps, RigOptions};
-use nlsdof::{level_responses, ForcedResponse};
+use nlsdof::{level_responses, AsNormalised, ForcedResponse};
 use nlsdof_io::model_file::{ModelDocument, Provenance, SignalMap};
 use nlsdof_report::steady_state::{sweep_json, SweepRequest};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use std::f64::consts::TAU;
 use std::path::PathBuf;
-
-/// `(x, v)`: displacement (m) and velocity (m/s) at every input sample.
-type Trajectory<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
 /// A power-law SDoF model (SI units):
 ///
@@ -28,7 +30,9 @@ type Trajectory<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 /// both zero-to-peak; frequencies are in Hz.
 ///
 /// `signal` (optional, a dict as the model file's `[signal]` table):
-/// `input_gain` (default 1), `input_offset`, `output_offset` (default 0).
+/// `input_gain` (default 1), `input_offset`, `output_offset` (default 0);
+/// a time-domain fit's `input_interpolation` ("cubic", "linear", "zoh") and
+/// RK4 `substeps` per sample, which `simulate` then follows.
 /// The model sees `gamma = input_gain * (u + input_offset)`: the forcing
 /// gain of a stepped-sine fit (`FitResult.model` carries it), the signal
 /// map of a time-domain fit. `sweep`, `steady_states`, `harmonic_sweep`,
@@ -78,6 +82,33 @@ fn signal_from(d: &Bound<'_, pyo3::types::PyDict>) -> PyResult<SignalMap> {
     let mut s = SignalMap::default();
     for (k, v) in d.iter() {
         let key: String = k.extract()?;
+        // the integration a time-domain fit states (issue 26)
+        if key == "input_interpolation" {
+            let name: String = v.extract().map_err(|_| {
+                value_error(
+                    "signal[\"input_interpolation\"] must be a string: cubic, linear or zoh",
+                )
+            })?;
+            s.input_interpolation = Some(InputInterpolation::parse(&name).ok_or_else(|| {
+                value_error(format!(
+                    "signal[\"input_interpolation\"] = {name:?} is not an interpolation (cubic, linear, zoh)"
+                ))
+            })?);
+            continue;
+        }
+        if key == "substeps" {
+            let n: usize = v
+                .extract()
+                .ok()
+                .filter(|n| (1..=MAX_SUBSTEPS).contains(n))
+                .ok_or_else(|| {
+                    value_error(format!(
+                        "signal[\"substeps\"] must be an integer from 1 to {MAX_SUBSTEPS}"
+                    ))
+                })?;
+            s.substeps = Some(n);
+            continue;
+        }
         let val: f64 = v
             .extract()
             .map_err(|_| value_error(format!("signal[{key:?}] must be a number")))?;
@@ -87,7 +118,7 @@ fn signal_from(d: &Bound<'_, pyo3::types::PyDict>) -> PyResult<SignalMap> {
             "output_offset" => s.output_offset = val,
             other => {
                 return Err(value_error(format!(
-                    "signal has no key {other:?}: use input_gain, input_offset, output_offset"
+                    "signal has no key {other:?}: use input_gain, input_offset, output_offset, input_interpolation, substeps"
                 )))
             }
         }
@@ -162,7 +193,8 @@ impl Model {
     }
 
     /// The `[signal]` table as a dict (`input_gain`, `input_offset`,
-    /// `output_offset`), or None.
+    /// `output_offset`; `input_interpolation` and `substeps` where the file
+    /// states them), or None.
     #[getter]
     fn signal<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
         self.signal
@@ -171,6 +203,12 @@ impl Model {
                 d.set_item("input_gain", s.input_gain)?;
                 d.set_item("input_offset", s.input_offset)?;
                 d.set_item("output_offset", s.output_offset)?;
+                if let Some(i) = s.input_interpolation {
+                    d.set_item("input_interpolation", i.name())?;
+                }
+                if let Some(n) = s.substeps {
+                    d.set_item("substeps", n)?;
+                }
                 Ok(d)
             })
             .transpose()
@@ -457,12 +495,17 @@ impl Model {
     /// `u` is a base acceleration and x the relative displacement (the
     /// structure sees -u). With a `signal` map the model sees
     /// `input_gain * (u + input_offset)` (as `nlsdof simulate`; the recorded
-    /// output is `x + signal["output_offset"]`). Returns numpy arrays (x, v)
-    /// at every sample, in m and m/s; the same numbers as `nlsdof simulate`.
-    /// `check=True` (default, as the CLI): the default method's run is
-    /// repeated at half the step and a `RuntimeWarning` given when the two
-    /// differ by more than 1e-3 of max |x| — about twice the work of the run
-    /// itself; `check=False` skips it (many calls on a known-good sampling).
+    /// output is `x + signal["output_offset"]`). Returns a `Simulation` that
+    /// unpacks as numpy arrays `x, v` at every sample, in m and m/s; the same
+    /// numbers as `nlsdof simulate`. `check=True` (default, as the CLI): the
+    /// integration error is estimated as the CLI does (step doubling on the
+    /// whole record, the Richardson factor of the law's order; for a method
+    /// other than the default, also its distance to the default reading of
+    /// the input) into `Simulation.integration_error`, and above 1e-3 of
+    /// max |x| a `RuntimeWarning` is given with the CLI's warning text (also
+    /// `Simulation.warning`). It costs about twice the work of the default
+    /// run itself; `check=False` skips it (many calls on a known-good
+    /// sampling).
     #[pyo3(signature = (u, fs, method="rk4", base=false, x0=0.0, v0=0.0, samples_per_step=None, rtol=1e-10, atol=1e-13, check=true))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
@@ -478,7 +521,7 @@ impl Model {
         rtol: f64,
         atol: f64,
         check: bool,
-    ) -> PyResult<Trajectory<'py>> {
+    ) -> PyResult<Simulation> {
         let record = match (method.to_ascii_lowercase().as_str(), samples_per_step) {
             ("rk4", None) => RecordMethod::Rk4Cubic,
             ("rk4", Some(s)) => RecordMethod::Rk4 {
@@ -507,7 +550,42 @@ impl Model {
             }
         }
         let model = &self.inner;
-        let cubic = check && record == RecordMethod::Rk4Cubic;
+        // a model file that states its input reconstruction and RK4
+        // substeps ([signal] input_interpolation, substeps, written by
+        // fit-time) is integrated as fit-time did, as `nlsdof simulate` does
+        let stated = self
+            .signal
+            .filter(|m| {
+                matches!(record, RecordMethod::Rk4Cubic)
+                    && (m.input_interpolation.is_some() || m.substeps.is_some())
+            })
+            .map(|m| Discretisation {
+                interpolation: m.input_interpolation.unwrap_or_default(),
+                substeps: m.substeps.unwrap_or(Discretisation::default().substeps),
+            });
+        if let Some(d) = stated {
+            let nm = model.as_normalised().map_err(value_error)?;
+            let tm = TimeModel {
+                model: nm,
+                gain,
+                input_offset: 0.0,
+                output_offset: 0.0,
+            };
+            let initial = State { x: x0, v: v0 };
+            let (x, v, error) = py
+                .detach(|| {
+                    let (x, v) = simulate_states(&tm, &u, fs, initial, &d)?;
+                    let error = if check && x.len() >= 2 {
+                        let diff = doubled_substeps_difference(&tm, &u, fs, initial, &d, &x)?;
+                        Some(nlsdof::simulation::step_doubling_error(&nm, diff, x.len()))
+                    } else {
+                        None
+                    };
+                    Ok::<_, nlsdof::identification::time_domain::TimeFitError>((x, v, error))
+                })
+                .map_err(value_error)?;
+            return self.simulation(py, x, v, error, record);
+        }
         let (x, v, error) = py
             .detach(|| {
                 let mut x = Vec::with_capacity(u.len());
@@ -518,15 +596,16 @@ impl Model {
                 };
                 let initial = State { x: x0, v: v0 };
                 simulate_record(model, &u, (gain, 0.0, fs), record, initial, &mut sink)?;
-                // the CLI's check of the default method (its first 4M samples)
-                let error = if cubic {
-                    let n = x.len().min(1 << 22);
-                    Some(nlsdof::simulation::rk4_cubic_error_estimate(
+                // the CLI's check (one implementation in the core): step
+                // doubling on the whole record, for every method
+                let error = if check {
+                    Some(nlsdof::simulation::record_error_estimate(
                         model,
                         &u,
                         (gain, 0.0, fs),
+                        record,
                         initial,
-                        &x[..n],
+                        &x,
                     )?)
                 } else {
                     None
@@ -534,17 +613,7 @@ impl Model {
                 Ok::<_, nlsdof::simulation::SimulationError>((x, v, error))
             })
             .map_err(value_error)?;
-        if let Some(e) = error.filter(|&e| !(e <= nlsdof::simulation::INTEGRATION_WARN)) {
-            // as `nlsdof simulate` warns on stderr: a RuntimeWarning
-            let msg = format!(
-                "estimated integration error {e:.1e} of max |x| is above {:e}: sample the input faster (at least 20 samples per cycle of the highest frequency, more for very light damping), or try method=\"dopri\" if it already has many samples per cycle",
-                nlsdof::simulation::INTEGRATION_WARN
-            );
-            let warn = py.import("warnings")?;
-            let cat = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
-            warn.call_method1("warn", (msg, cat, 2))?;
-        }
-        Ok((PyArray1::from_vec(py, x), PyArray1::from_vec(py, v)))
+        self.simulation(py, x, v, error, record)
     }
 
     /// The virtual stepped-sine rig: simulates the shaker dwell at each
@@ -1017,5 +1086,35 @@ impl HarmonicSweep {
             self.level.sweep.points.len(),
             self.level.sweep.jumps.len()
         )
+    }
+}
+
+impl Model {
+    /// The `Simulation` of `simulate`, with the CLI's warning (the same
+    /// text) given as a RuntimeWarning at the caller's line (level 1: the
+    /// method has no Python frame of its own).
+    fn simulation(
+        &self,
+        py: Python<'_>,
+        x: Vec<f64>,
+        v: Vec<f64>,
+        error: Option<nlsdof::simulation::IntegrationError>,
+        record: RecordMethod,
+    ) -> PyResult<Simulation> {
+        let warning = error
+            .as_ref()
+            .and_then(|e| nlsdof::simulation::integration_warning(e, record));
+        if let Some(msg) = &warning {
+            let warn = py.import("warnings")?;
+            let cat = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+            warn.call_method1("warn", (msg.as_str(), cat, 1))?;
+        }
+        Ok(Simulation::new(
+            x.len(),
+            PyArray1::from_vec(py, x).unbind(),
+            PyArray1::from_vec(py, v).unbind(),
+            error.map(|e| e.estimate),
+            warning,
+        ))
     }
 }

@@ -798,10 +798,13 @@ def test_fit_time_equals_cli(cli, tmp_path):
         f.write("u,y\n")
         for a, b in zip(u, x):
             f.write(f"{float(a)!r},{float(b)!r}\n")
+    # the record is the default scheme's own (RK4, h = 1/(2 fs)): fitted with
+    # that scheme (2 substeps) the model reproduces it to rounding; the
+    # automatic substeps fit the ODE instead (issue 26)
     doc = json.loads(run_cli(cli, "fit-time", "--input", path, "--input-column", "u", "--output-column", "y",
                              "--fs", fs, "--range", "0:4000", "--test", "4000:6000", "--model", "duffing",
-                             "--json"))
-    res = nlsdof.fit_time(u, x, fs=fs, model="duffing", fit_range=(0, 4000), tests=[(4000, 6000)])
+                             "--substeps", 2, "--json"))
+    res = nlsdof.fit_time(u, x, fs=fs, model="duffing", fit_range=(0, 4000), tests=[(4000, 6000)], substeps=2)
     # the model output travels with the result (the CLI writes it with --predict)
     assert len(res["estimation"]["y_model"]) == 4000 and len(res["tests"][0]["y_model"]) == 2000
     assert np.max(np.abs(res["tests"][0]["y_model"] - x[4000:6000])) < 1e-6 * np.max(np.abs(x))
@@ -819,9 +822,11 @@ def test_fit_time_equals_cli(cli, tmp_path):
     # the model file of fit-time, read by Python, simulates the test range to y_model
     out, pred = tmp_path / "m.toml", tmp_path / "p.csv"
     run_cli(cli, "fit-time", "--input", path, "--input-column", "u", "--output-column", "y", "--fs", fs,
-            "--range", "0:4000", "--test", "4000:6000", "--out", out, "--predict", pred)
+            "--range", "0:4000", "--test", "4000:6000", "--substeps", 2, "--out", out, "--predict", pred)
     m = nlsdof.Model.from_toml(out)
     assert m.signal is not None and m.provenance["tool"] == "nlsdof fit-time"
+    # the file states the scheme of the fit, which simulate follows
+    assert m.signal["substeps"] == 2 and m.signal["input_interpolation"] == "cubic"
     assert m.provenance["range"] == "0:4000"
     y_model = np.array([float(r["y_model"]) for r in csv.DictReader(open(pred))])
     init = doc["tests"][0]["initial"]

@@ -492,6 +492,7 @@ pub fn provenance(res: &FitResult, data: Option<&str>) -> nlsdof_io::model_file:
         cost: Some(res.cost),
         converged: Some(res.converged),
         range: None,
+        ..Default::default()
     }
 }
 

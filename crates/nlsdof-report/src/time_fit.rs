@@ -48,8 +48,18 @@ pub fn at_bounds(fit: &TimeFit) -> Vec<&'static str> {
 /// Why the fit is not to be trusted, if it is not: not converged, or
 /// J'J singular (no intervals).
 pub fn warning(fit: &TimeFit) -> Option<String> {
+    let ic = &fit.integration;
     if !fit.termination.converged() {
         Some(format!("the fit did not converge ({})", fit.termination))
+    } else if !ic.met {
+        Some(format!(
+            "the integration error {:.3e} (RMS change when the {} RK4 substeps per sample are doubled) is above {} of the RMS output error {:.3e}: the parameters partly describe the integrator{}",
+            ic.integration_error,
+            ic.substeps,
+            ic.tolerance,
+            ic.output_error,
+            if ic.automatic { "" } else { "; omit --substeps to choose them automatically" }
+        ))
     } else if fit.uncertainty.is_none() {
         Some("J'J is singular at the optimum: a parameter is not identifiable, no intervals".into())
     } else {
@@ -96,6 +106,18 @@ pub fn json(run: &TimeFitRun, total_s: f64) -> Value {
             "rms": fit.rms,
             "start_rms": fit.start_rms,
         },
+        "integration": {
+            "input_interpolation": fit.discretisation.interpolation.name(),
+            "substeps": fit.integration.substeps,
+            "step_s": fit.integration.step,
+            "automatic": fit.integration.automatic,
+            "integration_error": fit.integration.integration_error,
+            "output_error": fit.integration.output_error,
+            "ratio": fit.integration.integration_error / fit.integration.output_error,
+            "tolerance": fit.integration.tolerance,
+            "met": fit.integration.met,
+            "fits": fit.integration.refits,
+        },
         "tests": run.predictions.iter().map(|p| json!({
             "range": [p.range.start, p.range.end],
             "rms": p.rms,
@@ -136,6 +158,19 @@ pub fn text(run: &TimeFitRun) -> String {
         fit.termination,
         fit.iterations,
         run.fit_s
+    );
+    let ic = &fit.integration;
+    let _ = writeln!(
+        s,
+        "  integration: RK4, {} substeps per sample (h = {:.4e} s, {}), {} input; integration error {:.3e} = {:.2} % of the RMS output error ({}; target {} %)",
+        ic.substeps,
+        ic.step,
+        if ic.automatic { "chosen" } else { "fixed" },
+        fit.discretisation.interpolation,
+        ic.integration_error,
+        100.0 * ic.integration_error / ic.output_error,
+        if ic.met { "met" } else { "NOT met" },
+        100.0 * ic.tolerance
     );
     let _ = writeln!(s, "  parameter        value                 95 % interval");
     for (k, name) in TIME_PARAM_NAMES.iter().enumerate() {

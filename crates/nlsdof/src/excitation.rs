@@ -622,6 +622,87 @@ pub fn upsample_cubic(values: &[f64], factor: usize) -> Vec<f64> {
     out
 }
 
+/// How a uniformly sampled input is reconstructed between its samples — a
+/// part of a time-domain model (the same samples read as cubics or as a
+/// staircase drive the ODE differently). `fit-time` states it in the model
+/// file's `[signal]` table (`input_interpolation`) and `simulate` uses it.
+///
+/// * `Cubic` — the 4-point Lagrange cubic through the nearest samples
+///   ([`upsample_cubic`]); the default, and the reconstruction of every
+///   model file that does not state one.
+/// * `Linear` — straight lines between samples.
+/// * `Zoh` — zero-order hold: `u(t) = u_k` on `[t_k, t_{k+1})` (a
+///   staircase, as a DAC without reconstruction filter produces).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum InputInterpolation {
+    #[default]
+    Cubic,
+    Linear,
+    Zoh,
+}
+
+impl InputInterpolation {
+    /// Names accepted by [`InputInterpolation::parse`], in order.
+    pub const NAMES: [&'static str; 3] = ["cubic", "linear", "zoh"];
+
+    /// `cubic`, `linear` or `zoh` (case-insensitive); `None` otherwise.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "cubic" => Some(Self::Cubic),
+            "linear" => Some(Self::Linear),
+            "zoh" => Some(Self::Zoh),
+            _ => None,
+        }
+    }
+
+    /// The name written to model files and JSON.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Cubic => "cubic",
+            Self::Linear => "linear",
+            Self::Zoh => "zoh",
+        }
+    }
+
+    /// `values` resampled `factor` times finer on this reconstruction; the
+    /// samples are kept at indices `k · factor`, `(len − 1) · factor + 1`
+    /// values. For `Zoh` every point of `[k, k+1)` is `values[k]`: the
+    /// value at the interval's right end (its left limit `values[k]`) is
+    /// not on this grid, and an integrator must use `values[k]` for a stage
+    /// at the end of an interval (see `time_domain`'s RK4).
+    pub fn upsample(&self, values: &[f64], factor: usize) -> Vec<f64> {
+        let n = values.len();
+        if n == 0 || factor <= 1 {
+            return values.to_vec();
+        }
+        match self {
+            Self::Cubic => upsample_cubic(values, factor),
+            Self::Linear | Self::Zoh => {
+                let mut out = Vec::with_capacity((n - 1) * factor + 1);
+                for w in values.windows(2) {
+                    for j in 0..factor {
+                        out.push(match self {
+                            Self::Linear => w[0] + (j as f64 / factor as f64) * (w[1] - w[0]),
+                            _ => w[0],
+                        });
+                    }
+                }
+                out.push(values[n - 1]);
+                out
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for InputInterpolation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 #[cfg(test)]
 mod upsample_tests {
     use super::upsample_cubic;

@@ -5,7 +5,7 @@
 mod support;
 use nlsdof::excitation::{upsample_cubic, SampledInput};
 use nlsdof::identification::time_domain::{
-    fit_time_domain, output_and_sensitivities, predict, simulate_output, SampleRange,
+    fit_time_domain, output_and_sensitivities, predict, predict_with, simulate_output, SampleRange,
     TimeFitOptions, TimeModel, TimeRecord, N_TIME_PARAMS, TIME_PARAM_NAMES, UPSAMPLE,
 };
 use nlsdof::identification::ModelKind;
@@ -156,13 +156,21 @@ fn prediction_equals_the_simulator_on_cubic_input() {
 fn check_recovery(kind: ModelKind) {
     let (u, y) = record(kind, 4000, 0.0, 0);
     let rec = TimeRecord::new(&u, &y, FS).unwrap();
+    // the record is the default scheme's (cubic input, h = 1/(2 fs)) to
+    // rounding: fitted with that scheme (substeps fixed at 2), the fit must
+    // recover it exactly (the automatic choice would fit the ODE instead,
+    // see `synthetic_duffing_truth_not_step_size`)
     let f = fit_time_domain(
         &rec,
         SampleRange::new(0, 3000),
         kind,
-        &TimeFitOptions::default(),
+        &TimeFitOptions {
+            substeps: Some(2),
+            ..TimeFitOptions::default()
+        },
     )
     .unwrap();
+    assert_eq!(f.integration.substeps, 2);
     let th = truth_theta(kind);
     for &p in &f.free {
         let rel = (f.theta[p] - th[p]).abs() / th[p].abs().max(1e-2);
@@ -337,11 +345,15 @@ fn silverbox_duffing_beats_narx() {
         .iter()
         .map(|&(a, b)| {
             1000.0
-                * predict(&rec, SampleRange::new(a, b), &f.model())
+                * predict_with(&rec, SampleRange::new(a, b), &f.model(), &f.discretisation)
                     .unwrap()
                     .rms
         })
         .collect();
-    eprintln!("Silverbox Duffing scores [mV]: {scores:?}");
+    eprintln!(
+        "Silverbox Duffing scores [mV]: {scores:?}; {} substeps, integration error {:e} of output error {:e}",
+        f.integration.substeps, f.integration.integration_error, f.integration.output_error
+    );
+    assert!(f.integration.met);
     assert!(scores[0] < 4.15, "arrow full {} mV", scores[0]);
 }

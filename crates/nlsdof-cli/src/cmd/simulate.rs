@@ -3,20 +3,17 @@
 
 use crate::error::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use nlsdof::simulation::{simulate, simulate_record, Method, Options, RecordMethod, Sample, State};
+use nlsdof::identification::time_domain::{simulate_states, Discretisation, TimeModel};
+use nlsdof::simulation::{
+    simulate, simulate_record, Method, Options, RecordMethod, Sample, State, Summary,
+};
 use nlsdof::Model;
+use nlsdof::NormalisedModel;
 use nlsdof_io::signal_file::{read_signal, CsvWriter, SignalGrid};
 use nlsdof_report::simulation as report;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// Samples checked by the integration error estimate (the start of longer
-/// records): 4x this in f64 for the reference input.
-const CHECK_SAMPLES: usize = 1 << 22;
-/// Estimated integration error (relative to max |x|) above which a warning
-/// is printed.
-const ERROR_WARN: f64 = nlsdof::simulation::INTEGRATION_WARN;
 
 /// Default RK4 on uniform sampling: the input upsampled this many times by
 /// cubics and integrated with two fine samples per step, h = 2/(4 fs) =
@@ -111,14 +108,24 @@ METHODS:
         sample (accuracy reference; about 1.5x the RHS evaluations of rk4 x1).
 
 INTEGRATION ERROR:
-  Every run on uniform sampling is checked against RK4 with h = 1/(4 fs) and cubic
-  input (the first 4194304 samples): the estimate max|x - x_ref| / max|x_ref| is in the
-  summary (JSON: integration_error), and above 1e-3 a warning on stderr says what to
-  do: --method dopri, --samples-per-step 1, or a higher sampling rate.
+  Every run on uniform sampling is checked by step doubling on the whole record: the
+  default method is run again at h = 1/(4 fs) on the same cubic input, and the largest
+  difference over max |x| is scaled by 2^p/(2^p - 1), p the order RK4 keeps on the law
+  (4 for a smooth law; 2 + e for an exponent e that is not an even integer, so that
+  laws not smooth at zero velocity or displacement, e in (-1, 2), and Coulomb friction
+  are not underestimated). Another method adds its distance to that finer run (which
+  includes reading the input as linear). The estimate of the error against the exact
+  response to the cubic reading, relative to max |x|, is in the summary (JSON:
+  integration_error); above 1e-3 a warning on stderr says what to do (the text Python's
+  Model.simulate warns with). It costs about twice the run (three times for --method
+  dopri or --samples-per-step).
 
 SIGNAL MAP:
   A model file with a [signal] table (written by `nlsdof fit-time`) drives the model with
   gamma = input_gain * (input + input_offset) and adds a column y = x + output_offset.
+  When the table states input_interpolation (cubic | linear | zoh) and/or substeps, the
+  default RK4 integrates with that input reconstruction and h = 1/(substeps fs), as
+  fit-time did (the error check then doubles the substeps); files without them: cubic, 2.
 
 OUTPUT:
   --out FILE.csv: header t,accel,x,v (s, m/s^2 input as used, m, m/s), one row per
@@ -189,6 +196,45 @@ fn uff_datasets(
             d
         })
         .collect()
+}
+
+/// RK4 with the input reconstruction and substeps a model file states
+/// (`time_domain::simulate_states`, the integrator of `fit-time`); `raw` is
+/// the input before `gain`, `sink` gets `(k, gain · raw[k], x, v)`.
+fn simulate_stated(
+    nm: &NormalisedModel,
+    raw: &[f64],
+    gain: f64,
+    (t0, fs): (f64, f64),
+    d: &Discretisation,
+    initial: State,
+    sink: &mut dyn FnMut(usize, f64, f64, f64),
+) -> Result<Summary, CliError> {
+    let tm = TimeModel {
+        model: *nm,
+        gain,
+        input_offset: 0.0,
+        output_offset: 0.0,
+    };
+    let (xs, vs) = simulate_states(&tm, raw, fs, initial, d)?;
+    for (k, (x, v)) in xs.iter().zip(&vs).enumerate() {
+        sink(k, gain * raw[k], *x, *v);
+    }
+    let n = xs.len();
+    let steps = (n.saturating_sub(1) * d.substeps) as u64;
+    Ok(Summary {
+        samples: n,
+        outputs: n,
+        steps,
+        rhs_evaluations: 4 * steps,
+        samples_per_step: 1,
+        final_state: State {
+            x: xs.last().copied().unwrap_or(initial.x),
+            v: vs.last().copied().unwrap_or(initial.v),
+        },
+        final_time: t0 + n.saturating_sub(1) as f64 / fs,
+        ..Summary::default()
+    })
 }
 
 pub(crate) fn load_model_with_signal(
@@ -297,6 +343,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
     // Default on uniform sampling: RK4 with h = 1/fs and cubic mid-step
     // inputs, run as RK4 with two samples per step on the input upsampled 2x.
     let cubic = uniform && a.method == MethodArg::Rk4 && a.samples_per_step.is_none();
+    // A time-domain model file states its input reconstruction and RK4
+    // substeps ([signal] input_interpolation, substeps): the default RK4
+    // integrates that model as `fit-time` did.
+    let stated = signal_map
+        .filter(|m| cubic && (m.input_interpolation.is_some() || m.substeps.is_some()))
+        .map(|m| Discretisation {
+            interpolation: m.input_interpolation.unwrap_or_default(),
+            substeps: m.substeps.unwrap_or(Discretisation::default().substeps),
+        });
     let method = match a.method {
         MethodArg::Rk4 => {
             let sps = a.samples_per_step.unwrap_or(if uniform { 2 } else { 1 });
@@ -341,11 +396,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     let mut write_err = None;
     let mut max_x = 0.0f64;
     let mut outputs = 0usize;
-    let check_n = if uniform {
-        input.len().min(CHECK_SAMPLES)
-    } else {
-        0
-    };
+    // the integration error is checked on the whole of a uniform record
+    let check_n = if uniform { input.len() } else { 0 };
     let mut xs: Vec<f64> = Vec::with_capacity(check_n);
     let t_sim = Instant::now();
     let mut sink = |k: usize, u: f64, x: f64, v: f64| {
@@ -372,13 +424,17 @@ pub fn run(a: Args) -> Result<(), CliError> {
             progress.set(k as u64);
         }
     };
+    let record = match method {
+        _ if cubic => RecordMethod::Rk4Cubic,
+        Method::Rk4 { samples_per_step } => RecordMethod::Rk4 { samples_per_step },
+        Method::DormandPrince { rtol, atol } => RecordMethod::DormandPrince { rtol, atol },
+    };
     let summary = match signal.grid {
+        SignalGrid::Uniform { t0, fs } if stated.is_some() => {
+            let d = stated.unwrap_or_default();
+            simulate_stated(&nm, input.raw(), gain, (t0, fs), &d, initial, &mut sink)?
+        }
         SignalGrid::Uniform { t0, fs } => {
-            let record = match method {
-                _ if cubic => RecordMethod::Rk4Cubic,
-                Method::Rk4 { samples_per_step } => RecordMethod::Rk4 { samples_per_step },
-                Method::DormandPrince { rtol, atol } => RecordMethod::DormandPrince { rtol, atol },
-            };
             let mut each = |s: Sample| sink(s.index, s.u, s.x, s.v);
             simulate_record(&nm, input.raw(), (gain, t0, fs), record, initial, &mut each)?
         }
@@ -390,16 +446,32 @@ pub fn run(a: Args) -> Result<(), CliError> {
     if let Some(e) = write_err {
         return Err(e.into());
     }
-    // Integration error estimate: the same record (its first CHECK_SAMPLES
-    // samples) with RK4 at half the default step, cubic input.
+    // Integration error estimate (one implementation with Python's
+    // Model.simulate): step doubling on the whole record, scaled by the
+    // Richardson factor of the law's order.
     let error_estimate = match signal.grid {
+        SignalGrid::Uniform { fs, .. } if check_n >= 2 && stated.is_some() => {
+            let d = stated.unwrap_or_default();
+            let raw = &input.raw()[..check_n];
+            let tm = TimeModel {
+                model: nm,
+                gain,
+                input_offset: 0.0,
+                output_offset: 0.0,
+            };
+            let diff = nlsdof::identification::time_domain::doubled_substeps_difference(
+                &tm, raw, fs, initial, &d, &xs,
+            )?;
+            Some(nlsdof::simulation::step_doubling_error(&nm, diff, check_n))
+        }
         SignalGrid::Uniform { t0, fs } if check_n >= 2 => {
-            Some(nlsdof::simulation::rk4_cubic_error_estimate(
+            Some(nlsdof::simulation::record_error_estimate(
                 &nm,
-                &input.raw()[..check_n],
+                input.raw(),
                 (gain, t0, fs),
+                record,
                 initial,
-                &xs[..check_n.min(xs.len())],
+                &xs,
             )?)
         }
         _ => None,
@@ -413,23 +485,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
     }
     progress.finish();
     let elapsed = t_sim.elapsed().as_secs_f64();
-    if let Some(e) = error_estimate.filter(|&e| !(e <= ERROR_WARN)) {
-        let what = match (a.method, cubic, a.samples_per_step) {
-            (MethodArg::Dopri, _, _) | (_, false, Some(1)) | (_, false, None) => {
-                "the input is taken as linear between samples: omit --method dopri / --samples-per-step 1 (RK4 with cubic input), or sample the input faster"
-            }
-            (_, false, _) => {
-                "omit --samples-per-step 2 (RK4 with h = 1/(2 fs) and cubic input), or sample the input faster"
-            }
-            (_, true, _) => {
-                "sample the input faster (at least 20 samples per cycle of the highest frequency, more for very light damping), or try --method dopri if it already has many samples per cycle"
-            }
-        };
-        eprintln!(
-            "nlsdof: warning: estimated integration error {e:.1e} of max |x| is above {ERROR_WARN:e}: {what}"
-        );
+    // the text Python's Model.simulate warns with
+    if let Some(w) = error_estimate
+        .as_ref()
+        .and_then(|e| nlsdof::simulation::integration_warning(e, record))
+    {
+        eprintln!("nlsdof: warning: {w}");
     }
     let interpolation = match (a.method, cubic, summary.samples_per_step) {
+        _ if stated.is_some() => stated.map_or("cubic", |d| d.interpolation.name()),
         (MethodArg::Dopri, _, _) => "linear",
         (_, true, _) => "cubic",
         (_, false, 2) => "samples",
@@ -451,13 +515,15 @@ pub fn run(a: Args) -> Result<(), CliError> {
             Method::DormandPrince { .. } => "dopri",
         },
         // reported per input sample: 0.5 = two RK4 steps per sample
-        samples_per_step: if cubic {
+        samples_per_step: if let Some(d) = stated {
+            1.0 / d.substeps as f64
+        } else if cubic {
             2.0 / CUBIC_FACTOR as f64
         } else {
             summary.samples_per_step as f64
         },
         interpolation,
-        integration_error: error_estimate.map(|e| (e, check_n, e > ERROR_WARN)),
+        integration_error: error_estimate.map(|e| (e.estimate, e.samples, e.is_warned())),
         max_abs_x: max_x,
         elapsed_s: elapsed,
     };

@@ -18,14 +18,28 @@
 //! not separately identifiable. The nonlinear terms separate them (the
 //! asymmetry of the Silverbox circuit is such an offset).
 //!
-//! ## Discretisation: exactly the simulator's RK4
+//! ## Discretisation: the continuous-time model, to a controlled error
 //!
-//! The input between samples is the cubic through the four nearest samples
-//! ([`crate::excitation::upsample_cubic`], [`UPSAMPLE`] = 4 points per
-//! sample interval) and the ODE is advanced by classical RK4 with step
-//! `h = 1/(2 f_s)` whose stage inputs are those points: the default of
-//! `nlsdof simulate`, so a fitted model file reproduces the fit's
-//! predictions to rounding.
+//! The input between samples is reconstructed as the model states
+//! ([`InputInterpolation`]: the cubic through the four nearest samples by
+//! default, or linear, or a zero-order hold) and the ODE is advanced by
+//! classical RK4 with `n` substeps per sample, `h = 1/(n f_s)`, whose stage
+//! inputs are that reconstruction at the step's start, middle and end
+//! ([`Discretisation`]; with a hold, the end stage of the last substep of an
+//! interval uses the held value, the left limit). `n = 2` with cubic input
+//! is the default of `nlsdof simulate`.
+//!
+//! The fitted parameters must belong to the ODE, not to the integrator, so
+//! [`fit_time_domain`] chooses `n` (unless [`TimeFitOptions::substeps`]
+//! fixes it): it fits at `n = 2`, then measures the integration error at the
+//! fitted θ as the RMS change of ŷ when `n` is doubled, `e_n = RMS(ŷ_n −
+//! ŷ_2n)`. While `e_n` exceeds [`TimeFitOptions::integration_tolerance`]
+//! (1 %) of the RMS output error, `n` is raised to the value that RK4's
+//! fourth order predicts meets it (`n (e_n / (tol · rms))^{1/4}`, 10 %
+//! margin) and the fit is rerun from the current θ; the check is repeated at
+//! the end ([`IntegrationCheck`] reports the final `n`, `h`, `e_n` and the
+//! RMS output error). The model file records both the reconstruction and
+//! `n`, so `nlsdof simulate` reproduces the fit's predictions to rounding.
 //!
 //! ## Output error and exact discrete gradients
 //!
@@ -81,15 +95,96 @@ use super::levenberg_marquardt::{
 };
 use super::models::{ModelKind, Term};
 use super::uncertainty::t95;
-use crate::excitation::upsample_cubic;
+pub use crate::excitation::InputInterpolation;
 use crate::model::NormalisedModel;
 use crate::simulation::State;
 use rayon::prelude::*;
 use thiserror::Error;
 
-/// Interpolation points per sample interval; RK4 step `h = 2/(UPSAMPLE f_s)`
-/// (the default of `nlsdof simulate`).
+/// Interpolation points per sample interval of the default
+/// [`Discretisation`] (cubic input, 2 RK4 substeps per sample); RK4 step
+/// `h = 2/(UPSAMPLE f_s)` (the default of `nlsdof simulate`).
 pub const UPSAMPLE: usize = 4;
+
+/// Most RK4 substeps per sample the automatic choice of [`fit_time_domain`]
+/// (and [`Discretisation::new`]) takes.
+pub const MAX_SUBSTEPS: usize = 256;
+
+/// How the continuous-time model is integrated on a sampled input: the
+/// input reconstruction between samples (a part of the model) and the RK4
+/// substeps per sample, `h = 1/(substeps · f_s)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Discretisation {
+    pub interpolation: InputInterpolation,
+    /// RK4 steps per sample interval (1..=[`MAX_SUBSTEPS`]).
+    pub substeps: usize,
+}
+
+impl Default for Discretisation {
+    /// Cubic input, 2 substeps (`h = 1/(2 f_s)`): the default of
+    /// `nlsdof simulate` and of model files that state neither.
+    fn default() -> Self {
+        Self {
+            interpolation: InputInterpolation::Cubic,
+            substeps: UPSAMPLE / 2,
+        }
+    }
+}
+
+impl Discretisation {
+    /// Checked: `substeps` in 1..=[`MAX_SUBSTEPS`].
+    pub fn new(interpolation: InputInterpolation, substeps: usize) -> Result<Self, TimeFitError> {
+        if !(1..=MAX_SUBSTEPS).contains(&substeps) {
+            return Err(TimeFitError::InvalidOption {
+                name: "substeps",
+                value: substeps as f64,
+                reason: "must be between 1 and 256",
+            });
+        }
+        Ok(Self {
+            interpolation,
+            substeps,
+        })
+    }
+    /// The reconstructed input at the RK4 stage times: `2 · substeps`
+    /// points per sample interval.
+    fn fine(&self, u: &[f64]) -> Vec<f64> {
+        self.interpolation.upsample(u, 2 * self.substeps)
+    }
+    /// The same reconstruction with twice the substeps.
+    fn doubled(&self) -> Self {
+        Self {
+            substeps: 2 * self.substeps,
+            ..*self
+        }
+    }
+}
+
+/// The integration-error check of a fit ([`fit_time_domain`]): the scheme
+/// used and the RMS change of ŷ at the fitted θ when its substeps are
+/// doubled, against the RMS output error being fitted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IntegrationCheck {
+    /// RK4 substeps per sample of the final fit.
+    pub substeps: usize,
+    /// The RK4 step, s (`1/(substeps · f_s)`).
+    pub step: f64,
+    /// `RMS(ŷ_n − ŷ_2n)` over the estimation range at the fitted θ (an
+    /// estimate of the integration error of ŷ_n, in the output's unit).
+    pub integration_error: f64,
+    /// The RMS output error of the fit.
+    pub output_error: f64,
+    /// The tolerance: `integration_error <= tolerance · output_error` is
+    /// the target.
+    pub tolerance: f64,
+    /// Whether the target was met (false when [`MAX_SUBSTEPS`] or a fixed
+    /// [`TimeFitOptions::substeps`] did not suffice).
+    pub met: bool,
+    /// Whether `substeps` was chosen automatically.
+    pub automatic: bool,
+    /// Fits run (1 = the first choice met the target).
+    pub refits: usize,
+}
 
 /// Output samples at the start of a test range that [`predict`] may use (to
 /// estimate the initial state), as in the Silverbox benchmark.
@@ -396,28 +491,29 @@ fn power_terms(s: f64, mu: f64, want_log: bool) -> (f64, f64, f64) {
     (sp, (mu + 1.0) * p, lg)
 }
 
-/// The fine input (cubic through the samples, [`UPSAMPLE`] points per
-/// interval) of a range of samples.
-fn fine_input(u: &[f64]) -> Vec<f64> {
-    upsample_cubic(u, UPSAMPLE)
-}
-
-/// Simulation of θ on a fine input; `ys` gets ŷ at every record sample and,
-/// with `jac = Some`, the rows `∂ŷ_k/∂θ` (all [`N_TIME_PARAMS`] columns).
-/// `logs = (ρ, η)` columns needed. Returns `false` on a non-finite state.
+/// Simulation of θ on a fine input (`disc.fine`); `ys` gets ŷ at every
+/// record sample and, with `jac = Some`, the rows `∂ŷ_k/∂θ` (all
+/// [`N_TIME_PARAMS`] columns); `vs = Some` gets the velocity at every
+/// sample. `logs = (ρ, η)` columns needed. Returns `false` on a non-finite
+/// state.
+#[allow(clippy::too_many_arguments)]
 fn run(
     th: &[f64; N_TIME_PARAMS],
     fine: &[f64],
     fs: f64,
+    disc: &Discretisation,
     ys: &mut Vec<f64>,
     mut jac: Option<&mut Vec<[f64; N_TIME_PARAMS]>>,
     logs: (bool, bool),
+    mut vs: Option<&mut Vec<f64>>,
 ) -> bool {
     const P: usize = N_TIME_PARAMS;
     let (alpha, delta, beta, rho, kappa, eta) =
         (th[ALPHA], th[DELTA], th[BETA], th[RHO], th[KAPPA], th[ETA]);
     let (g, bu, by) = (th[GAIN], th[INPUT_OFFSET], th[OUTPUT_OFFSET]);
-    let h = 2.0 / (UPSAMPLE as f64 * fs);
+    let per_sample = 2 * disc.substeps;
+    let zoh = disc.interpolation == InputInterpolation::Zoh;
+    let h = 1.0 / (disc.substeps as f64 * fs);
     let hh = 0.5 * h;
     let h6 = h * (1.0 / 6.0);
     let sens = jac.is_some();
@@ -471,6 +567,10 @@ fn run(
         }
     };
     emit(x, &sx, ys, &mut jac);
+    if let Some(w) = vs.as_deref_mut() {
+        w.clear();
+        w.push(v);
+    }
     let mut da1 = [0.0; P];
     let mut da2 = [0.0; P];
     let mut da3 = [0.0; P];
@@ -481,7 +581,16 @@ fn run(
     let mut i = 0;
     let n_fine = fine.len();
     while i + 2 < n_fine {
-        let (um, u1) = (fine[i + 1], fine[i + 2]);
+        let boundary = (i + 2) % per_sample == 0;
+        // a hold keeps u_k up to the end of its interval (the left limit)
+        let (um, u1) = (
+            fine[i + 1],
+            if zoh && boundary {
+                fine[i + 1]
+            } else {
+                fine[i + 2]
+            },
+        );
         let x2 = x + hh * v;
         let v2 = v + hh * a1;
         if sens {
@@ -526,32 +635,98 @@ fn run(
         if !(x.is_finite() && v.is_finite()) {
             return false;
         }
-        a1 = accel(x, v, &sx, &sv, u1, &mut da1);
+        a1 = accel(x, v, &sx, &sv, fine[i + 2], &mut da1);
         i += 2;
-        if i % UPSAMPLE == 0 {
+        if boundary {
             emit(x, &sx, ys, &mut jac);
+            if let Some(w) = vs.as_deref_mut() {
+                w.push(v);
+            }
         }
     }
     true
 }
 
 /// ŷ of a model on a range's input from an initial state (the prediction of
-/// [`predict`] once the initial state is known).
+/// [`predict`] once the initial state is known), with the default
+/// [`Discretisation`] (cubic input, `h = 1/(2 f_s)`).
 pub fn simulate_output(
     tm: &TimeModel,
     u: &[f64],
     fs: f64,
     initial: State,
 ) -> Result<Vec<f64>, TimeFitError> {
+    simulate_output_with(tm, u, fs, initial, &Discretisation::default())
+}
+
+/// [`simulate_output`] with a given input reconstruction and substeps.
+pub fn simulate_output_with(
+    tm: &TimeModel,
+    u: &[f64],
+    fs: f64,
+    initial: State,
+    disc: &Discretisation,
+) -> Result<Vec<f64>, TimeFitError> {
+    Ok(simulate_states(tm, u, fs, initial, disc)?.0)
+}
+
+/// ŷ and the velocity `x'` at every sample of `u` (see
+/// [`simulate_output_with`]); `x = ŷ − output_offset`.
+pub fn simulate_states(
+    tm: &TimeModel,
+    u: &[f64],
+    fs: f64,
+    initial: State,
+    disc: &Discretisation,
+) -> Result<(Vec<f64>, Vec<f64>), TimeFitError> {
     if !(fs.is_finite() && fs > 0.0) {
         return Err(TimeFitError::NonPositiveFs { fs });
     }
+    let disc = Discretisation::new(disc.interpolation, disc.substeps)?;
     let th = tm.theta(initial);
     let mut ys = Vec::with_capacity(u.len());
-    if !run(&th, &fine_input(u), fs, &mut ys, None, (false, false)) {
+    let mut vs = Vec::with_capacity(u.len());
+    if !run(
+        &th,
+        &disc.fine(u),
+        fs,
+        &disc,
+        &mut ys,
+        None,
+        (false, false),
+        Some(&mut vs),
+    ) {
         return Err(TimeFitError::Diverged);
     }
-    Ok(ys)
+    Ok((ys, vs))
+}
+
+/// Step doubling of a stated discretisation (the integration check of
+/// `nlsdof simulate` and Python's `Model.simulate` on a model file that
+/// states its input reconstruction and substeps): `x`, the displacement
+/// simulated from `u` with `disc`, against the same record at twice the
+/// substeps, `max |x − x₂| / max |x₂|`. Scale it by the law's Richardson
+/// factor with [`crate::simulation::step_doubling_error`].
+pub fn doubled_substeps_difference(
+    tm: &TimeModel,
+    u: &[f64],
+    fs: f64,
+    initial: State,
+    disc: &Discretisation,
+    x: &[f64],
+) -> Result<f64, TimeFitError> {
+    let n = x.len().min(u.len());
+    let fine = Discretisation {
+        substeps: (2 * disc.substeps).min(MAX_SUBSTEPS),
+        ..*disc
+    };
+    let (x2, _) = simulate_states(tm, &u[..n], fs, initial, &fine)?;
+    let (mut diff, mut scale) = (0.0f64, 0.0f64);
+    for (a, b) in x.iter().zip(&x2) {
+        diff = diff.max((a - b).abs());
+        scale = scale.max(b.abs());
+    }
+    Ok(if scale > 0.0 { diff / scale } else { 0.0 })
 }
 
 /// ŷ and its exact discrete Jacobian (one row of [`N_TIME_PARAMS`] per
@@ -564,13 +739,16 @@ pub fn output_and_sensitivities(
 ) -> Option<(Vec<f64>, Vec<[f64; N_TIME_PARAMS]>)> {
     let mut ys = Vec::new();
     let mut jac = Vec::new();
+    let disc = Discretisation::default();
     run(
         theta,
-        &fine_input(u),
+        &disc.fine(u),
         fs,
+        &disc,
         &mut ys,
         Some(&mut jac),
         (true, true),
+        None,
     )
     .then_some((ys, jac))
 }
@@ -581,6 +759,7 @@ struct OutputError<'a> {
     fine: &'a [f64],
     y: &'a [f64],
     fs: f64,
+    disc: Discretisation,
     base: [f64; N_TIME_PARAMS],
     free: &'a [usize],
     scale: Vec<f64>,
@@ -604,7 +783,16 @@ impl LeastSquares for OutputError<'_> {
     fn residuals(&self, z: &[f64]) -> Option<Vec<f64>> {
         let th = self.theta(z);
         let mut ys = Vec::with_capacity(self.y.len());
-        if !run(&th, self.fine, self.fs, &mut ys, None, (false, false)) {
+        if !run(
+            &th,
+            self.fine,
+            self.fs,
+            &self.disc,
+            &mut ys,
+            None,
+            (false, false),
+            None,
+        ) {
             return None;
         }
         for (a, b) in ys.iter_mut().zip(self.y) {
@@ -616,7 +804,16 @@ impl LeastSquares for OutputError<'_> {
         let th = self.theta(z);
         let mut ys = Vec::with_capacity(self.y.len());
         let mut jac = Vec::with_capacity(self.y.len());
-        if !run(&th, self.fine, self.fs, &mut ys, Some(&mut jac), self.logs) {
+        if !run(
+            &th,
+            self.fine,
+            self.fs,
+            &self.disc,
+            &mut ys,
+            Some(&mut jac),
+            self.logs,
+            None,
+        ) {
             return None;
         }
         for (a, b) in ys.iter_mut().zip(self.y) {
@@ -698,6 +895,15 @@ pub struct TimeFitOptions {
     /// more add seeded random exponents.
     pub starts: usize,
     pub seed: u64,
+    /// The input reconstruction between samples (part of the model).
+    pub interpolation: InputInterpolation,
+    /// RK4 substeps per sample: `None` chooses them so that the
+    /// integration error is at most `integration_tolerance` of the RMS
+    /// output error (see the module docs); `Some(n)` fixes them.
+    pub substeps: Option<usize>,
+    /// Target of the automatic choice: integration error (RMS change of ŷ
+    /// when the substeps are doubled) over RMS output error.
+    pub integration_tolerance: f64,
 }
 
 impl Default for TimeFitOptions {
@@ -714,6 +920,9 @@ impl Default for TimeFitOptions {
             },
             starts: 1,
             seed: 1,
+            interpolation: InputInterpolation::Cubic,
+            substeps: None,
+            integration_tolerance: 0.01,
         }
     }
 }
@@ -739,6 +948,10 @@ pub struct TimeFit {
     pub uncertainty: Option<TimeUncertainty>,
     /// ŷ over the estimation range.
     pub y_model: Vec<f64>,
+    /// The input reconstruction and RK4 substeps the fit integrated with.
+    pub discretisation: Discretisation,
+    /// The integration-error check at the optimum.
+    pub integration: IntegrationCheck,
 }
 
 impl TimeFit {
@@ -880,6 +1093,7 @@ struct Local {
 /// One bounded LM run over `free` from `start`.
 fn local_fit(
     fine: &[f64],
+    disc: &Discretisation,
     y: &[f64],
     fs: f64,
     start: &[f64; N_TIME_PARAMS],
@@ -910,6 +1124,7 @@ fn local_fit(
         fine,
         y,
         fs,
+        disc: *disc,
         base: *start,
         free,
         scale: scale.clone(),
@@ -964,20 +1179,30 @@ pub fn fit_time_domain(
     };
     let stiff = fixed_or(s, 2.0);
     let damp = fixed_or(d, 1.0);
+    let tol = opts.integration_tolerance;
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(TimeFitError::InvalidOption {
+            name: "integration_tolerance",
+            value: tol,
+            reason: "must be finite and > 0",
+        });
+    }
+    let mut disc = Discretisation::new(
+        opts.interpolation,
+        opts.substeps.unwrap_or(Discretisation::default().substeps),
+    )?;
     let start = equation_error(u, y, fs, stiff, damp)?;
-    let fine = fine_input(u);
-    let rms_of = |th: &[f64; N_TIME_PARAMS]| -> Option<f64> {
+    let mut fine = disc.fine(u);
+    let simulate = |th: &[f64; N_TIME_PARAMS], fine: &[f64], disc: &Discretisation| {
         let mut ys = Vec::new();
-        run(th, &fine, fs, &mut ys, None, (false, false)).then(|| {
-            (ys.iter()
-                .zip(y)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>()
-                / y.len() as f64)
-                .sqrt()
-        })
+        run(th, fine, fs, disc, &mut ys, None, (false, false), None).then_some(ys)
     };
-    let start_rms = rms_of(&start).unwrap_or(f64::INFINITY);
+    let rms_between = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>() / b.len() as f64).sqrt()
+    };
+    let start_rms = simulate(&start, &fine, &disc)
+        .map(|ys| rms_between(&ys, y))
+        .unwrap_or(f64::INFINITY);
     // stage 1: exponents fixed
     let mut free: Vec<usize> = vec![ALPHA, DELTA, GAIN, OUTPUT_OFFSET, X0, V0];
     if stiff.is_some() {
@@ -988,7 +1213,7 @@ pub fn fit_time_domain(
         free.push(KAPPA);
     }
     free.sort_unstable();
-    let stage1 = local_fit(&fine, y, fs, &start, &free, &opts.lm)?;
+    let stage1 = local_fit(&fine, &disc, y, fs, &start, &free, &opts.lm)?;
     let mut best = stage1;
     // stage 2: free exponents
     let mut free2 = free.clone();
@@ -1020,7 +1245,7 @@ pub fn fit_time_domain(
         }
         let results: Vec<Result<Local, TimeFitError>> = starts
             .par_iter()
-            .map(|th| local_fit(&fine, y, fs, th, &free2, &opts.lm))
+            .map(|th| local_fit(&fine, &disc, y, fs, th, &free2, &opts.lm))
             .collect();
         for r in results.into_iter().flatten() {
             if r.cost < best.cost {
@@ -1029,15 +1254,54 @@ pub fn fit_time_domain(
         }
         free = free2;
     }
+    // integration error at the optimum: ŷ at twice the substeps; refit at
+    // more substeps while it exceeds tol · RMS output error
+    let spread = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut refits = 1;
+    let integration = loop {
+        let yn = simulate(&best.theta, &fine, &disc).ok_or(TimeFitError::StartNotEvaluable)?;
+        let d2 = disc.doubled();
+        let e = simulate(&best.theta, &d2.fine(u), &d2)
+            .map(|y2| rms_between(&yn, &y2))
+            .unwrap_or(f64::INFINITY);
+        let out = rms_between(&yn, y);
+        // a floor for noise-free records: rounding of the output's scale
+        let target = tol * out.max(1e-12 * spread);
+        let met = e <= target;
+        let check = IntegrationCheck {
+            substeps: disc.substeps,
+            step: 1.0 / (disc.substeps as f64 * fs),
+            integration_error: e,
+            output_error: out,
+            tolerance: tol,
+            met,
+            automatic: opts.substeps.is_none(),
+            refits,
+        };
+        if met || opts.substeps.is_some() || disc.substeps >= MAX_SUBSTEPS || refits >= 6 {
+            break check;
+        }
+        // RK4: the error falls as n⁻⁴; 10 % margin, at least one more step
+        let ratio = if e.is_finite() { e / target } else { 16.0 };
+        let n = ((disc.substeps as f64 * ratio.powf(0.25) * 1.1).ceil() as usize)
+            .max(disc.substeps + 1)
+            .min(MAX_SUBSTEPS);
+        disc = Discretisation::new(disc.interpolation, n)?;
+        fine = disc.fine(u);
+        best = local_fit(&fine, &disc, y, fs, &best.theta, &free, &opts.lm)?;
+        refits += 1;
+    };
     let mut ys = Vec::new();
     let mut jac = Vec::new();
     let ok = run(
         &best.theta,
         &fine,
         fs,
+        &disc,
         &mut ys,
         Some(&mut jac),
         (free.contains(&RHO), free.contains(&ETA)),
+        None,
     );
     if !ok {
         return Err(TimeFitError::StartNotEvaluable);
@@ -1062,6 +1326,8 @@ pub fn fit_time_domain(
         iterations: best.iterations,
         uncertainty,
         y_model: ys,
+        discretisation: disc,
+        integration,
     })
 }
 
@@ -1081,12 +1347,25 @@ pub struct Prediction {
 
 /// Predicts the output over `range` from the input alone; the output is
 /// read only at the first [`INIT_WINDOW`] samples, to fit the initial state
-/// (LM over x₀, v₀ with the model fixed).
+/// (LM over x₀, v₀ with the model fixed). Integrates with the default
+/// [`Discretisation`]; [`predict_with`] takes the fit's.
 pub fn predict(
     record: &TimeRecord<'_>,
     range: SampleRange,
     tm: &TimeModel,
 ) -> Result<Prediction, TimeFitError> {
+    predict_with(record, range, tm, &Discretisation::default())
+}
+
+/// [`predict`] with a given input reconstruction and substeps (those of the
+/// fit: [`TimeFit::discretisation`]).
+pub fn predict_with(
+    record: &TimeRecord<'_>,
+    range: SampleRange,
+    tm: &TimeModel,
+    disc: &Discretisation,
+) -> Result<Prediction, TimeFitError> {
+    let disc = &Discretisation::new(disc.interpolation, disc.substeps)?;
     range.check("test", record.u.len(), INIT_WINDOW + 1)?;
     let u = &record.u[range.start..range.end];
     let fs = record.fs;
@@ -1097,20 +1376,20 @@ pub fn predict(
         v: (-3.0 * y0[0] + 4.0 * y0[1] - y0[2]) / (2.0 * h),
     });
     // the initial state from the first INIT_WINDOW samples (input included)
-    let fine_init = fine_input(&u[..INIT_WINDOW]);
+    let fine_init = disc.fine(&u[..INIT_WINDOW]);
     let lm = LmOptions {
         max_iterations: 100,
         max_evaluations: 300,
         ..TimeFitOptions::default().lm
     };
-    let loc = local_fit(&fine_init, y0, fs, &th, &[X0, V0], &lm)?;
+    let loc = local_fit(&fine_init, disc, y0, fs, &th, &[X0, V0], &lm)?;
     th[X0] = loc.theta[X0];
     th[V0] = loc.theta[V0];
     let initial = State {
         x: th[X0],
         v: th[V0],
     };
-    let y_model = simulate_output(tm, u, fs, initial)?;
+    let y_model = simulate_output_with(tm, u, fs, initial, disc)?;
     let y = &record.y[range.start..range.end];
     let m = range.len() - INIT_WINDOW;
     let rms = (y_model[INIT_WINDOW..]

@@ -46,6 +46,15 @@
 //!   `sqrt(½ Σ (e_i / (atol_i + rtol·max|y_i|))²)` with `atol_x = atol`,
 //!   `atol_v = atol · ω_n`.
 //!
+//! ## Integration error
+//!
+//! [`record_error_estimate`] estimates the error of a simulated record by
+//! step doubling on the whole record, scaled by the Richardson factor of
+//! the order RK4 keeps on the law ([`convergence_order`]: below 4 for laws
+//! not smooth at zero); `nlsdof simulate` and Python's `Model.simulate`
+//! both report it and warn above [`INTEGRATION_WARN`] with
+//! [`integration_warning`]'s text.
+//!
 //! ## Friction and non-smooth damping (η < 0)
 //!
 //! * `η = −1` (Coulomb friction `c_f sgn(x')`, Eq 27): **event handling**,
@@ -89,15 +98,20 @@
 
 pub(crate) mod coulomb;
 mod dopri;
+mod error_estimate;
 pub(crate) mod law;
 pub(crate) mod rk4;
 pub(crate) mod rk4_step;
 mod upsampled;
 
 pub use crate::error::SimulationError;
+pub use error_estimate::{
+    convergence_order, integration_warning, record_error_estimate, step_doubling_error,
+    IntegrationError, INTEGRATION_WARN,
+};
 pub use upsampled::{
     rk4_cubic_error_estimate, simulate_record, simulate_upsampled, RecordMethod, Upsampling,
-    DEFAULT_UPSAMPLING, INTEGRATION_WARN,
+    DEFAULT_UPSAMPLING,
 };
 
 use crate::excitation::{Excitation, SampledInput};

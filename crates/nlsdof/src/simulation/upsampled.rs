@@ -151,13 +151,11 @@ pub fn simulate_record(
 }
 
 /// Estimated integration error of a [`RecordMethod::Rk4Cubic`] run, relative
-/// to `max |x|`: the same record (its first `x.len()` samples) integrated
-/// again at half the step (`h = 1/(4 f_s)`) on the same cubic input; the
-/// largest difference of the displacements `x` of the first run, over the
-/// largest `|x|`. It estimates the error of the step on that input
-/// reconstruction, not the error of reading the input as cubics (which both
-/// runs share). Used by `nlsdof simulate` and Python's `Model.simulate`,
-/// which warn above [`INTEGRATION_WARN`].
+/// to `max |x|`: [`super::record_error_estimate`] (step doubling on the
+/// whole of `x`, scaled by the Richardson factor of the law's order).
+/// Kept for callers of the earlier name; it used to report the plain
+/// difference to the half-step run on the first 4 Mi samples, which is
+/// about half the error for a law that is not smooth at zero (issue 26).
 pub fn rk4_cubic_error_estimate(
     model: &(impl AsNormalised + ?Sized),
     values: &[f64],
@@ -165,32 +163,9 @@ pub fn rk4_cubic_error_estimate(
     initial: State,
     x: &[f64],
 ) -> Result<f64, SimulationError> {
-    let n = x.len().min(values.len());
-    if n < 2 {
-        return Ok(0.0);
-    }
-    let (mut diff, mut scale) = (0.0f64, 0.0f64);
-    simulate_upsampled(
-        model,
-        &values[..n],
-        grid,
-        &Upsampling {
-            factor: 2 * DEFAULT_UPSAMPLING,
-            initial,
-        },
-        &mut |s: Sample| {
-            if let Some(&xm) = x.get(s.index) {
-                diff = diff.max((xm - s.x).abs());
-                scale = scale.max(s.x.abs());
-            }
-        },
-    )?;
-    Ok(if scale > 0.0 { diff / scale } else { 0.0 })
+    super::record_error_estimate(model, values, grid, RecordMethod::Rk4Cubic, initial, x)
+        .map(|e| e.estimate)
 }
-
-/// Estimated integration error (relative to `max |x|`) above which
-/// `nlsdof simulate` and Python's `Model.simulate` warn.
-pub const INTEGRATION_WARN: f64 = 1e-3;
 
 #[cfg(test)]
 mod record_tests {

@@ -185,6 +185,23 @@ impl DecayAnalysis {
 /// scratch).
 pub const ANALYTIC_BLOCK: usize = 1 << 20;
 
+/// The one-sided band-pass weight of bin `k` of a `len`-point FFT (bin
+/// width `df` Hz): 1 inside `band` (Hz) more than `edge` from its ends, a
+/// raised-cosine taper over `edge`, 0 outside, at DC and at and above
+/// Nyquist (the analytic signal keeps positive frequencies only).
+fn band_weight(k: usize, len: usize, df: f64, band: (f64, f64), edge: f64) -> f64 {
+    let f = k as f64 * df;
+    if k == 0 || k >= len / 2 || f < band.0 || f > band.1 {
+        return 0.0;
+    }
+    let d = (f - band.0).min(band.1 - f);
+    if d >= edge {
+        1.0
+    } else {
+        0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
+    }
+}
+
 /// The analytic signal of `x` (mean removed) restricted to the band
 /// `[f1, f2]` Hz, handed to `out` in consecutive pieces that cover the
 /// record in order.
@@ -242,18 +259,7 @@ fn analytic_pieces(x: &[f64], fs: f64, band: (f64, f64), out: &mut dyn FnMut(&[C
         }
         forward.process_with_scratch(&mut buf, &mut scratch);
         for (k, c) in buf.iter_mut().enumerate() {
-            let f = k as f64 * df;
-            let w = if k == 0 || k >= len / 2 || f < band.0 || f > band.1 {
-                0.0
-            } else {
-                let d = (f - band.0).min(band.1 - f);
-                if d >= edge {
-                    1.0
-                } else {
-                    0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
-                }
-            };
-            *c *= 2.0 * w / len as f64;
+            *c *= 2.0 * band_weight(k, len, df, band, edge) / len as f64;
         }
         inverse.process_with_scratch(&mut buf, &mut scratch);
         out(&buf[lead..lead + keep.min(n - s)]);
@@ -830,18 +836,7 @@ mod tests {
         let df = fs / m as f64;
         let edge = 0.1 * (band.1 - band.0);
         for (k, c) in buf.iter_mut().enumerate() {
-            let f = k as f64 * df;
-            let w = if k == 0 || k >= m / 2 || f < band.0 || f > band.1 {
-                0.0
-            } else {
-                let d = (f - band.0).min(band.1 - f);
-                if d >= edge {
-                    1.0
-                } else {
-                    0.5 - 0.5 * (std::f64::consts::PI * d / edge).cos()
-                }
-            };
-            *c *= 2.0 * w / m as f64;
+            *c *= 2.0 * band_weight(k, m, df, band, edge) / m as f64;
         }
         planner.plan_fft_inverse(m).process(&mut buf);
         buf.truncate(n);

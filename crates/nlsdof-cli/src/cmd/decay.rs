@@ -47,9 +47,10 @@ pub struct Args {
 }
 
 const DECAY_HELP: &str = "METHOD:
-  Analytic signal by FFT (zero-padded to >= 2N, band-pass with raised-cosine edges), the
-  instantaneous amplitude a(t) = |z| and frequency f(t); the ends are trimmed by
-  max(3 cycles, 2/bandwidth). Backbone f(a) and decay rate lambda(a) = -d ln a/dt per
+  Analytic signal by FFT (zero-padded to >= 2N, band-pass with raised-cosine edges; a
+  record longer than 2^19 samples is filtered in overlapping blocks of 2^20 points, so
+  memory stays near the record's own size), the instantaneous amplitude a(t) = |z| and
+  frequency f(t); the ends are trimmed by max(3 cycles, 2/bandwidth). Backbone f(a) and decay rate lambda(a) = -d ln a/dt per
   amplitude bin. The averaged power-law equations
       omega^2 = alpha + g(rho) beta a^rho
       da/dt  = -a (delta + g(eta) kappa (omega a)^eta) / 2

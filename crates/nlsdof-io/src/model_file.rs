@@ -192,6 +192,19 @@ fn one() -> f64 {
 }
 
 impl SignalMap {
+    /// The integration the table states (`input_interpolation` and/or
+    /// `substeps`, written by `fit-time`), the missing one at its default;
+    /// `None` when it states neither (the simulator's own default applies).
+    pub fn stated_discretisation(
+        &self,
+    ) -> Option<nlsdof::identification::time_domain::Discretisation> {
+        use nlsdof::identification::time_domain::Discretisation;
+        (self.input_interpolation.is_some() || self.substeps.is_some()).then(|| Discretisation {
+            interpolation: self.input_interpolation.unwrap_or_default(),
+            substeps: self.substeps.unwrap_or(Discretisation::default().substeps),
+        })
+    }
+
     /// The gain finite and non-zero, the offsets finite: `Err` names the key
     /// (`signal.input_gain`, ...) and says what is wrong.
     pub fn check(&self) -> Result<(), (&'static str, String)> {

@@ -6,8 +6,7 @@ use crate::arrays::{f64_array, values};
 use crate::convert::{to_py, value_error};
 use crate::simulation::Simulation;
 use nlsdof::identification::time_domain::{
-    doubled_substeps_difference, simulate_states, Discretisation, InputInterpolation, TimeModel,
-    MAX_SUBSTEPS,
+    simulate_states, stated_integration_error, InputInterpolation, TimeModel, MAX_SUBSTEPS,
 };
 use nlsdof::simulation::{simulate_record, RecordMethod, Sample, State};
 use nlsdof::stepped_sine::{run_sweeps, RigOptions};
@@ -555,14 +554,8 @@ impl Model {
         // fit-time) is integrated as fit-time did, as `nlsdof simulate` does
         let stated = self
             .signal
-            .filter(|m| {
-                matches!(record, RecordMethod::Rk4Cubic)
-                    && (m.input_interpolation.is_some() || m.substeps.is_some())
-            })
-            .map(|m| Discretisation {
-                interpolation: m.input_interpolation.unwrap_or_default(),
-                substeps: m.substeps.unwrap_or(Discretisation::default().substeps),
-            });
+            .filter(|_| matches!(record, RecordMethod::Rk4Cubic))
+            .and_then(|m| m.stated_discretisation());
         if let Some(d) = stated {
             let nm = model.as_normalised().map_err(value_error)?;
             let tm = TimeModel {
@@ -576,8 +569,7 @@ impl Model {
                 .detach(|| {
                     let (x, v) = simulate_states(&tm, &u, fs, initial, &d)?;
                     let error = if check && x.len() >= 2 {
-                        let diff = doubled_substeps_difference(&tm, &u, fs, initial, &d, &x)?;
-                        Some(nlsdof::simulation::step_doubling_error(&nm, diff, x.len()))
+                        Some(stated_integration_error(&tm, &u, fs, initial, &d, &x)?)
                     } else {
                         None
                     };

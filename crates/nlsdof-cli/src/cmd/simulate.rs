@@ -347,11 +347,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
     // substeps ([signal] input_interpolation, substeps): the default RK4
     // integrates that model as `fit-time` did.
     let stated = signal_map
-        .filter(|m| cubic && (m.input_interpolation.is_some() || m.substeps.is_some()))
-        .map(|m| Discretisation {
-            interpolation: m.input_interpolation.unwrap_or_default(),
-            substeps: m.substeps.unwrap_or(Discretisation::default().substeps),
-        });
+        .filter(|_| cubic)
+        .and_then(|m| m.stated_discretisation());
     let method = match a.method {
         MethodArg::Rk4 => {
             let sps = a.samples_per_step.unwrap_or(if uniform { 2 } else { 1 });
@@ -459,10 +456,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 input_offset: 0.0,
                 output_offset: 0.0,
             };
-            let diff = nlsdof::identification::time_domain::doubled_substeps_difference(
-                &tm, raw, fs, initial, &d, &xs,
-            )?;
-            Some(nlsdof::simulation::step_doubling_error(&nm, diff, check_n))
+            Some(
+                nlsdof::identification::time_domain::stated_integration_error(
+                    &tm, raw, fs, initial, &d, &xs,
+                )?,
+            )
         }
         SignalGrid::Uniform { t0, fs } if check_n >= 2 => {
             Some(nlsdof::simulation::record_error_estimate(

@@ -705,16 +705,16 @@ pub fn simulate_states(
 /// `nlsdof simulate` and Python's `Model.simulate` on a model file that
 /// states its input reconstruction and substeps): `x`, the displacement
 /// simulated from `u` with `disc`, against the same record at twice the
-/// substeps, `max |x − x₂| / max |x₂|`. Scale it by the law's Richardson
-/// factor with [`crate::simulation::step_doubling_error`].
-pub fn doubled_substeps_difference(
+/// substeps, `max |x − x₂| / max |x₂|`, scaled by the law's Richardson
+/// factor ([`crate::simulation::step_doubling_error`]).
+pub fn stated_integration_error(
     tm: &TimeModel,
     u: &[f64],
     fs: f64,
     initial: State,
     disc: &Discretisation,
     x: &[f64],
-) -> Result<f64, TimeFitError> {
+) -> Result<crate::simulation::IntegrationError, TimeFitError> {
     let n = x.len().min(u.len());
     let fine = Discretisation {
         substeps: (2 * disc.substeps).min(MAX_SUBSTEPS),
@@ -726,7 +726,8 @@ pub fn doubled_substeps_difference(
         diff = diff.max((a - b).abs());
         scale = scale.max(b.abs());
     }
-    Ok(if scale > 0.0 { diff / scale } else { 0.0 })
+    let diff = if scale > 0.0 { diff / scale } else { 0.0 };
+    Ok(crate::simulation::step_doubling_error(&tm.model, diff, n))
 }
 
 /// ŷ and its exact discrete Jacobian (one row of [`N_TIME_PARAMS`] per

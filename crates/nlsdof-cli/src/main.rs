@@ -202,9 +202,9 @@ fn main() {
     if !matches!(cli.command, Command::Demo(_)) {
         nlsdof_io::atomic::defer_commits();
     }
-    // `fit --plot` writes SVG (checked here: cmd/fit.rs is being rewritten).
+    // `fit --plot` writes SVG or PNG (checked here, before any work).
     if let Command::Fit(a) = &cli.command {
-        if let Err(e) = nlsdof_report::frf_plot::check_svg_name(a.plot.as_deref()) {
+        if let Err(e) = nlsdof_report::figure_file::check_plot_name(a.plot.as_deref()) {
             eprintln!("nlsdof: error: {e}");
             std::process::exit(2);
         }

@@ -542,10 +542,45 @@ fn profile_option_reports_output_error_intervals() {
         assert!(hi >= est && hi - est < 0.1, "{hi}");
     }
     assert!(rho["fits"].as_u64().unwrap() >= 2);
-    // the text report names it
+    assert!(rho["refused"].is_null(), "{rho}");
+    // the one interval reported for rho is that profile, with its method;
+    // alpha's is Wald, and ci95 keeps the Wald interval
+    let params = v["parameters"].as_array().unwrap();
+    let p = |n: &str| params.iter().find(|p| p["name"] == n).unwrap().clone();
+    assert_eq!(p("rho")["interval"]["method"], "output-error profile");
+    assert_eq!(p("rho")["interval"]["ci95"], rho["ci95"]);
+    assert_eq!(p("alpha")["interval"]["method"], "Wald");
+    assert_eq!(p("alpha")["interval"]["ci95"], p("alpha")["ci95"]);
+    // the text report: one interval per parameter, named by its method
     let text = String::from_utf8_lossy(&run(false).stdout).into_owned();
-    assert!(
-        text.contains("profile 95 % interval (output error) rho"),
-        "{text}"
-    );
+    let row = |name: &str| {
+        text.lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("no {name} row in {text}"))
+            .to_string()
+    };
+    assert!(row("rho").contains("] output-error profile"), "{text}");
+    assert!(row("alpha").contains("] Wald"), "{text}");
+    assert!(!text.contains("equation-error profile"), "{text}");
+    // --intervals all: every method, each with what it leaves out
+    let all = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args([
+            "fit",
+            csv.to_str().unwrap(),
+            "--model",
+            "generalised-stiffness",
+        ])
+        .args(["--profile", "--intervals", "all"])
+        .output()
+        .unwrap();
+    let all = String::from_utf8_lossy(&all.stdout).into_owned();
+    for m in [
+        "Wald: linearised",
+        "output-error profile: the objective",
+        "equation-error profile: the branch-free",
+    ] {
+        assert!(all.contains(m), "{m} in {all}");
+    }
+    assert!(all.contains("leaves out"), "{all}");
 }

@@ -110,6 +110,31 @@ fn demo_wing_gives_the_model_exponents() {
         serde_json::json!("generalised")
     );
     assert_eq!(v["phase"]["used"], serde_json::json!(true));
+
+    // `fit --from-inspect`: inspect's exponents, as `inspect` reports them,
+    // beside the fit's; the race also starts from the landscape node
+    // nearest to them (default grid 41 x 41 over rho 0..10, eta -1..8:
+    // nodes 0.25 and 0.225 apart), and the fit still finds the wing's
+    // exponents
+    let f = json(&["fit", csv.to_str().unwrap(), "--from-inspect", "--json"]);
+    let fi = &f["from_inspect"];
+    assert_eq!(fi["rho"]["inspect"].as_f64().unwrap(), rho);
+    assert_eq!(fi["eta"]["inspect"].as_f64().unwrap(), eta);
+    let node = &fi["start_node"];
+    let (nr, ne) = (node["rho"].as_f64().unwrap(), node["eta"].as_f64().unwrap());
+    assert!((nr - rho).abs() <= 0.125 + 1e-9, "node rho {nr} vs {rho}");
+    assert!((ne - eta).abs() <= 0.1125 + 1e-9, "node eta {ne} vs {eta}");
+    let fit_rho = fi["rho"]["fit"].as_f64().unwrap();
+    assert!((fit_rho - 4.0022).abs() < 0.05, "fit rho {fit_rho}");
+    assert!(fi["rho"]["fit_free"].as_bool().unwrap());
+    let text = ok(&["fit", csv.to_str().unwrap(), "--from-inspect"]);
+    assert!(
+        text.contains("From inspect") && text.contains("landscape node rho = "),
+        "{text}"
+    );
+    // without the flag there is no such section
+    let plain = json(&["fit", csv.to_str().unwrap(), "--json"]);
+    assert!(plain.get("from_inspect").is_none());
 }
 
 #[test]

@@ -346,7 +346,7 @@ fn figure_names_follow_one_policy() {
     let decay = decay_record(dir.path());
     let model = example("duffing-strong.toml");
     let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    let (png, svg) = (p("d.png"), p("d.svg"));
+    let (pdf, svg) = (p("d.pdf"), p("d.svg"));
     let runs: Vec<(Vec<&str>, &str)> = vec![
         (
             vec![
@@ -356,9 +356,9 @@ fn figure_names_follow_one_policy() {
                 "--column",
                 "x",
                 "--plot",
-                &png,
+                &pdf,
             ],
-            "written as SVG",
+            "written as SVG or PNG",
         ),
         (
             vec![
@@ -374,9 +374,9 @@ fn figure_names_follow_one_policy() {
                 "--steps",
                 "5",
                 "--plot",
-                &png,
+                &pdf,
             ],
-            "written as SVG",
+            "written as SVG or PNG",
         ),
         (
             vec![

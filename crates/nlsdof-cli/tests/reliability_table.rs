@@ -88,7 +88,7 @@ fn classes() -> Vec<Class> {
         c("9", "`fit --frequency-weight NaN` without `--phase-resonance`", "fit {d}/data.csv --model duffing --frequency-weight NaN", Captured, Error("--phase-resonance")),
         c("9", "`linear-id --max-iterations 0`", "linear-id {d}/frf.csv --max-iterations 0", Captured, Error("--max-iterations 0")),
         c("9", "data row with an extra field", "fit {d}/extra.csv --model duffing --starts 2", Captured, Error("7 fields")),
-        c("9", "`frf --plot p.png`", "{FRF} --plot {d}/p.png", Captured, Error("file name ending in .svg")),
+        c("9", "`frf --plot p.pdf`", "{FRF} --plot {d}/p.pdf", Captured, Error("file name ending in .svg or .png")),
         c("-", "missing input file", "fit {d}/absent.csv --model duffing", Captured, Error("cannot read")),
         c("-", "model with mass = nan", "roots --model {d}/nanmass.toml --gamma 1 --f-hz 10", Captured, Error("mass")),
         c("-", "empty signal CSV", "spectrogram --input {d}/empty.csv --fs 100", Captured, Error("no samples")),

@@ -29,8 +29,10 @@ pub struct GridMap {
     pub cross_label: String,
 }
 
-const W: u32 = 820;
-const H: u32 = 640;
+const W: u32 = 860;
+const H: u32 = 680;
+/// Height of the legend strip under the map, pixels.
+const LEGEND_H: u32 = 36;
 
 fn draw_err<E: std::fmt::Display>(e: E) -> FigureError {
     FigureError::Draw {
@@ -85,30 +87,46 @@ fn draw<DB: DrawingBackend>(
             detail: format!("{} values for a {nx} x {ny} grid", map.values.len()),
         });
     }
+    if nx * ny < 2 {
+        return Err(FigureError::Draw {
+            figure: "the grid map",
+            detail: "a single node has nothing to map (draw it as a value, or a 1-D profile)"
+                .into(),
+        });
+    }
     let vmax = map
         .values
         .iter()
         .copied()
         .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max)
-        .max(1e-12);
+        .fold(0.0f64, f64::max);
+    // a flat map (every value 0) still gets a readable colour bar
+    let vmax = if vmax > 1e-9 { vmax } else { 1.0 };
     let (x0, _) = half(&map.x, 0);
     let (_, x1) = half(&map.x, nx - 1);
     let (y0, _) = half(&map.y, 0);
     let (_, y1) = half(&map.y, ny - 1);
-    let (main, bar) = root.split_horizontally(W - 110);
+    let (upper, legend) = root.split_vertically(H - LEGEND_H);
+    let (main, bar) = upper.split_horizontally(W - 120);
     let mut chart = ChartBuilder::on(&main)
-        .caption(&map.title, ("sans-serif", 18))
+        .caption(&map.title, ("sans-serif", 19))
         .margin(12)
-        .x_label_area_size(44)
-        .y_label_area_size(54)
+        .x_label_area_size(48)
+        .y_label_area_size(62)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(draw_err)?;
+    let (xs, ys) = (x1 - x0, y1 - y0);
+    let x_fmt = |v: &f64| crate::panel::tick(*v, xs);
+    let y_fmt = |v: &f64| crate::panel::tick(*v, ys);
     chart
         .configure_mesh()
         .disable_mesh()
         .x_desc(map.x_label.as_str())
         .y_desc(map.y_label.as_str())
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .axis_desc_style(("sans-serif", 16))
+        .label_style(("sans-serif", 15))
         .draw()
         .map_err(draw_err)?;
     let mut cells = Vec::with_capacity(nx * ny);
@@ -133,34 +151,66 @@ fn draw<DB: DrawingBackend>(
                 .iter()
                 .map(|&p| Circle::new(p, 6, WHITE.stroke_width(2))),
         )
-        .map_err(draw_err)?
-        .label(map.rings_label.as_str())
-        .legend(|(x, y)| Circle::new((x, y), 5, BLACK.stroke_width(2)));
+        .map_err(draw_err)?;
     if let Some(p) = map.cross {
         chart
             .draw_series(std::iter::once(Cross::new(p, 8, RED.stroke_width(3))))
-            .map_err(draw_err)?
-            .label(map.cross_label.as_str())
-            .legend(|(x, y)| Cross::new((x, y), 5, RED.stroke_width(2)));
+            .map_err(draw_err)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
+    // the map's frame (as the line figures' plot areas have)
+    let (fx, fy) = chart.plotting_area().get_pixel_range();
+    root.draw(&Rectangle::new(
+        [(fx.start, fy.start), (fx.end, fy.end)],
+        crate::DARK.stroke_width(1),
+    ))
+    .map_err(draw_err)?;
+    // the legend, in its strip under the map (off the cells)
+    let font = ("sans-serif", 15).into_font().color(&BLACK);
+    let (lx, ly) = legend.get_base_pixel();
+    let y = ly + LEGEND_H as i32 / 2;
+    let mut x = lx + 80;
+    let entries: [(Option<&str>, bool); 2] = [
+        (Some(map.rings_label.as_str()), true),
+        (map.cross.map(|_| map.cross_label.as_str()), false),
+    ];
+    for (label, ring) in entries {
+        let Some(label) = label else { continue };
+        if ring {
+            root.draw(&Circle::new((x, y), 6, BLACK.stroke_width(2)))
+                .map_err(draw_err)?;
+        } else {
+            root.draw(&Cross::new((x, y), 6, RED.stroke_width(3)))
+                .map_err(draw_err)?;
+        }
+        root.draw(&Text::new(
+            label.to_string(),
+            (x + 14, y),
+            font.pos(plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Left,
+                plotters::style::text_anchor::VPos::Center,
+            )),
+        ))
         .map_err(draw_err)?;
+        let (w, _) = root.estimate_text_size(label, &font).unwrap_or((200, 13));
+        x += 14 + w as i32 + 40;
+    }
     // colour bar
     let mut cb = ChartBuilder::on(&bar)
-        .margin_top(40)
-        .margin_bottom(56)
-        .margin_right(8)
-        .y_label_area_size(46)
+        .margin_top(44)
+        .margin_bottom(60)
+        .margin_right(10)
+        .y_label_area_size(64)
         .build_cartesian_2d(0.0..1.0, 0.0..vmax)
         .map_err(draw_err)?;
+    let cb_fmt = |v: &f64| crate::panel::tick(*v, vmax);
     cb.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
         .y_desc(map.value_label.as_str())
+        .y_labels(8)
+        .y_label_formatter(&cb_fmt)
+        .axis_desc_style(("sans-serif", 16))
+        .label_style(("sans-serif", 15))
         .draw()
         .map_err(draw_err)?;
     let steps = 64;
@@ -170,6 +220,12 @@ fn draw<DB: DrawingBackend>(
         let c = viridis(1.0 - (a + b) / (2.0 * vmax));
         Rectangle::new([(0.0, a), (1.0, b)], RGBColor(c[0], c[1], c[2]).filled())
     }))
+    .map_err(draw_err)?;
+    let (fx, fy) = cb.plotting_area().get_pixel_range();
+    root.draw(&Rectangle::new(
+        [(fx.start, fy.start), (fx.end, fy.end)],
+        crate::DARK.stroke_width(1),
+    ))
     .map_err(draw_err)?;
     Ok(())
 }

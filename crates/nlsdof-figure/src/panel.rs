@@ -10,8 +10,12 @@ use crate::FigureError;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-/// Tableau-10 without its grey, one colour per input level or series.
-pub const COLOURS: [RGBColor; 9] = [
+/// One colour per input level or series: Tableau-10 without its grey, then
+/// eleven colours chosen greedily for the largest CIELAB distance to all
+/// before them (and to [`GREY`]), so that 20 curves stay distinct (smallest
+/// pairwise distance ΔE76 ≈ 28, between purple and pink). The Python module
+/// (`nlsdof.plot`) uses the same list.
+pub const COLOURS: [RGBColor; 20] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -21,6 +25,17 @@ pub const COLOURS: [RGBColor; 9] = [
     RGBColor(227, 119, 194),
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
+    RGBColor(0, 0, 255),
+    RGBColor(255, 34, 255),
+    RGBColor(0, 51, 0),
+    RGBColor(0, 17, 153),
+    RGBColor(51, 34, 68),
+    RGBColor(255, 0, 119),
+    RGBColor(136, 102, 0),
+    RGBColor(119, 187, 136),
+    RGBColor(136, 0, 68),
+    RGBColor(0, 119, 255),
+    RGBColor(255, 136, 136),
 ];
 /// Reference lines, backbones, measured points in the background.
 pub const GREY: RGBColor = RGBColor(150, 150, 150);
@@ -29,9 +44,69 @@ pub const DARK: RGBColor = RGBColor(40, 40, 40);
 /// Mesh lines of a chart (major, minor).
 pub const MESH: (RGBColor, RGBColor) = (RGBColor(222, 222, 222), RGBColor(244, 244, 244));
 
-/// The `i`-th colour of the palette (cycling).
+/// The `i`-th colour of the palette (cycling after 20).
 pub fn colour(i: usize) -> RGBColor {
     COLOURS[i % COLOURS.len()]
+}
+
+/// Dash patterns (pixels on, off) of the `i`-th cycle of the palette:
+/// curve `i` is drawn in [`colour`]`(i)` with [`dash`]`(i)`, so that
+/// curves 21 to 80 differ from curves 1 to 20 by their dash as well.
+pub const DASHES: [Option<(u32, u32)>; 4] = [None, Some((9, 3)), Some((3, 3)), Some((12, 3))];
+
+/// The line of curve `i` of width `w`: solid for the first 20 curves, then
+/// the [`DASHES`] in turn.
+pub fn dash(i: usize, w: u32) -> Style {
+    match DASHES[(i / COLOURS.len()) % DASHES.len()] {
+        None => Style::Line(w),
+        Some((on, off)) => Style::DashPattern(w, on, off),
+    }
+}
+
+/// Line and marker of a measured sweep direction, one convention in every
+/// figure (and in `nlsdof.plot`): up-sweeps solid lines and filled dots,
+/// down-sweeps dashed lines (7 on, 4 off) and hollow circles.
+pub fn sweep_styles(up: bool, width: u32, radius: u32) -> (Style, Style) {
+    if up {
+        (Style::Line(width), Style::Filled(radius))
+    } else {
+        (Style::DashPattern(width, 7, 4), Style::Dots(radius + 1))
+    }
+}
+
+/// One length unit for every figure of a run: the largest of m, mm, µm and
+/// nm in which `peak_m` (metres) is at least 1, and its scale factor from
+/// metres (`nlsdof.plot` chooses the same way).
+pub fn length_unit(peak_m: f64) -> (&'static str, f64) {
+    let peak = peak_m.abs();
+    for (name, scale) in [("m", 1.0), ("mm", 1e3), ("µm", 1e6)] {
+        if peak * scale >= 1.0 {
+            return (name, scale);
+        }
+    }
+    ("nm", 1e9)
+}
+
+/// The format of a figure file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Svg,
+    Png,
+}
+
+/// [`render`] or [`render_png`], as the file's bytes.
+pub fn render_as(
+    format: Format,
+    title: &str,
+    panels: &[Panel],
+    cols: usize,
+    w: u32,
+    h: u32,
+) -> Result<Vec<u8>, FigureError> {
+    match format {
+        Format::Svg => render(title, panels, cols, w, h).map(String::into_bytes),
+        Format::Png => render_png(title, panels, cols, w, h),
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +156,9 @@ pub enum Corner {
     Outside,
 }
 
-/// Width of the [`Corner::Outside`] legend strip, pixels.
+/// Width of the [`Corner::Outside`] legend strip before it is fitted to
+/// the labels (the strip is as wide as the measured labels, at most half
+/// the panel), pixels.
 pub const LEGEND_W: u32 = 235;
 
 #[derive(Debug, Clone)]
@@ -130,7 +207,7 @@ fn plot_err<E: std::fmt::Display>(e: E) -> FigureError {
 }
 
 /// Tick label with decimals suited to an axis spanning `span`.
-fn tick(v: f64, span: f64) -> String {
+pub(crate) fn tick(v: f64, span: f64) -> String {
     let decimals = (1.0 - span.abs().max(1e-300).log10().floor()).clamp(0.0, 8.0) as usize;
     let s = format!("{v:.decimals$}");
     if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
@@ -229,13 +306,23 @@ fn draw_figure<DB: DrawingBackend>(
     root.draw(&Text::new(
         title.to_string(),
         (16, 12),
-        ("sans-serif", 19).into_font().color(&BLACK),
+        ("sans-serif", 21).into_font().color(&BLACK),
     ))
     .map_err(plot_err)?;
     let (_, body) = root.split_vertically(TITLE_H);
     let areas = body.split_evenly((rows, cols));
-    for (panel, area) in panels.iter().zip(areas.iter()) {
-        draw_panel(root, area, panel)?;
+    // panels of one column share the widest outside legend strip, so that
+    // their plot areas line up
+    let mut strips = vec![0u32; cols];
+    for (k, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
+        let entries: Vec<&Series> = panel.series.iter().filter(|s| s.label.is_some()).collect();
+        if panel.legend == Corner::Outside && !entries.is_empty() {
+            let w = legend_layout(area, &entries, panel.legend)?.strip_w;
+            strips[k % cols] = strips[k % cols].max(w);
+        }
+    }
+    for (k, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
+        draw_panel(root, area, panel, strips[k % cols])?;
     }
     root.present().map_err(plot_err)?;
     Ok(())
@@ -245,10 +332,15 @@ fn draw_panel<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     area: &DrawingArea<DB, plotters::coord::Shift>,
     panel: &Panel,
+    min_strip: u32,
 ) -> Result<(), FigureError> {
-    let (chart_area, legend_area) = if panel.legend == Corner::Outside {
+    // the legend's entries and layout (measured with the embedded font)
+    let entries: Vec<&Series> = panel.series.iter().filter(|s| s.label.is_some()).collect();
+    let mut layout = legend_layout(area, &entries, panel.legend)?;
+    layout.strip_w = layout.strip_w.max(min_strip);
+    let (chart_area, legend_area) = if panel.legend == Corner::Outside && !entries.is_empty() {
         let (w, _) = area.dim_in_pixel();
-        let (a, b) = area.split_horizontally(w.saturating_sub(LEGEND_W));
+        let (a, b) = area.split_horizontally(w.saturating_sub(layout.strip_w));
         (a, Some(b))
     } else {
         (area.clone(), None)
@@ -287,7 +379,7 @@ fn draw_panel<DB: DrawingBackend>(
         }
     };
     let mut chart = ChartBuilder::on(area)
-        .caption(&panel.title, ("sans-serif", 15))
+        .caption(&panel.title, ("sans-serif", 17))
         .margin(10)
         .margin_right(18)
         .x_label_area_size(42)
@@ -302,8 +394,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_labels(7)
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&y_fmt)
-        .axis_desc_style(("sans-serif", 13))
-        .label_style(("sans-serif", 12))
+        .axis_desc_style(("sans-serif", 15))
+        .label_style(("sans-serif", 14))
         .bold_line_style(MESH.0)
         .light_line_style(MESH.1)
         // no axis lines or tick marks from plotters (they would be SVG
@@ -328,6 +420,18 @@ fn draw_panel<DB: DrawingBackend>(
             .copied()
             .filter(|p| p.0.is_finite() && p.1.is_finite())
             .map(|(x, y)| (x, y.clamp(y0, y1)))
+            .collect();
+        // one point per pixel: repeated pixels make zero-length segments,
+        // whose joins the bitmap backend draws as long spikes
+        let mut last = None;
+        let pts: Vec<(f64, f64)> = pts
+            .into_iter()
+            .filter(|p| {
+                let px = chart.backend_coord(p);
+                let keep = last != Some(px);
+                last = Some(px);
+                keep
+            })
             .collect();
         match s.style {
             Style::Line(wd) => {
@@ -380,27 +484,29 @@ fn draw_panel<DB: DrawingBackend>(
         }
     }
     // legend, by hand, in pixels
-    let entries: Vec<&Series> = panel.series.iter().filter(|s| s.label.is_some()).collect();
     if entries.is_empty() {
         return Ok(());
     }
     let (px0, py0) = chart.backend_coord(&(x0, y1));
-
-    let row = 16;
-    let font = 12;
-    let text_w = entries
-        .iter()
-        .map(|s| s.label.as_ref().map_or(0, |l| l.chars().count()))
-        .max()
-        .unwrap_or(0) as i32
-        * 68
-        / 10;
-    let box_w = 40 + text_w + 8;
-    let box_h = row * entries.len() as i32 + 8;
+    let LegendLayout {
+        row,
+        col_w,
+        per_col,
+        ..
+    } = layout;
+    let font = LEGEND_FONT;
+    let n_cols = entries.len().div_ceil(per_col.max(1)) as i32;
+    let box_w = col_w * n_cols;
+    let box_h = row * entries.len().min(per_col) as i32 + 8;
     let (bx, by) = match (panel.legend, &legend_area) {
         (Corner::Outside, Some(la)) => {
-            let (ox, _) = la.get_base_pixel();
-            (ox + 4, py0 + 8)
+            let (ox, oy) = la.get_base_pixel();
+            let (_, lh) = la.dim_in_pixel();
+            // level with the plot's top, moved up if it would run off
+            (
+                ox + 4,
+                (py0 + 8).min(oy + lh as i32 - box_h - 2).max(oy + 2),
+            )
         }
         _ => (px0 + 8, py0 + 8),
     };
@@ -415,7 +521,9 @@ fn draw_panel<DB: DrawingBackend>(
     ))
     .map_err(plot_err)?;
     for (i, s) in entries.iter().enumerate() {
-        let y = by + 4 + row * i as i32 + row / 2;
+        let (c, r) = ((i / per_col) as i32, (i % per_col) as i32);
+        let bx = bx + c * col_w;
+        let y = by + 4 + row * r + row / 2;
         let (lx0, lx1) = (bx + 6, bx + 32);
         match s.style {
             // a solid swatch is a filled bar, so that the SVG's polylines
@@ -444,20 +552,24 @@ fn draw_panel<DB: DrawingBackend>(
                     s.colour.stroke_width(wd.max(1)),
                 ))
                 .map_err(plot_err)?,
-            Style::Dots(r) => root
-                .draw(&Circle::new(
-                    ((lx0 + lx1) / 2, y),
-                    r.max(2),
-                    s.colour.stroke_width(1),
-                ))
-                .map_err(plot_err)?,
-            Style::Filled(r) => root
-                .draw(&Circle::new(
-                    ((lx0 + lx1) / 2, y),
-                    r.max(2),
+            // marker swatches are polygons, so that the SVG's circles are
+            // the data's points only (scripts count them)
+            Style::Dots(r) => {
+                let c = ((lx0 + lx1) / 2, y);
+                let r = r.max(3) as f64;
+                root.draw(&Polygon::new(octagon(c, r + 0.5), s.colour.filled()))
+                    .map_err(plot_err)?;
+                root.draw(&Polygon::new(octagon(c, r - 1.0), WHITE.filled()))
+                    .map_err(plot_err)?
+            }
+            Style::Filled(r) => {
+                let c = ((lx0 + lx1) / 2, y);
+                root.draw(&Polygon::new(
+                    octagon(c, r.max(3) as f64 + 0.5),
                     s.colour.filled(),
                 ))
-                .map_err(plot_err)?,
+                .map_err(plot_err)?
+            }
             Style::Arrow(wd) => {
                 let x = (lx0 + lx1) / 2;
                 draw_arrow(root, (x, y - row / 2), (x, y + row / 2), s.colour, wd)?
@@ -471,6 +583,72 @@ fn draw_panel<DB: DrawingBackend>(
         .map_err(plot_err)?;
     }
     Ok(())
+}
+
+/// Font size of legend entries as asked of plotters (which writes
+/// `size / 1.24` px: 14 gives 11.3 px).
+const LEGEND_FONT: i32 = 14;
+
+/// Where a legend's entries go: rows of `row` pixels, columns of `col_w`
+/// pixels with `per_col` entries each, in a strip `strip_w` pixels wide
+/// ([`Corner::Outside`]).
+#[derive(Debug, Clone, Copy)]
+struct LegendLayout {
+    row: i32,
+    col_w: i32,
+    per_col: usize,
+    strip_w: u32,
+}
+
+/// Lays the legend out from the labels' measured widths: one column when
+/// the entries fit the panel's height, more columns side by side otherwise;
+/// an outside strip as wide as the columns (at most half the panel).
+fn legend_layout<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    entries: &[&Series],
+    corner: Corner,
+) -> Result<LegendLayout, FigureError> {
+    let row = 18;
+    let font: TextStyle = ("sans-serif", LEGEND_FONT as u32).into();
+    let mut text_w = 0;
+    for s in entries {
+        let l = s.label.as_deref().unwrap_or("");
+        let w = area
+            .estimate_text_size(l, &font)
+            .map(|(w, _)| w as i32)
+            // no font: the width of DejaVu Sans' average glyph at 12 px
+            .unwrap_or(l.chars().count() as i32 * 7);
+        text_w = text_w.max(w);
+    }
+    let col_w = 40 + text_w + 16;
+    let (aw, ah) = area.dim_in_pixel();
+    // the rows that fit between the plot's top and the panel's bottom
+    let usable = (ah as i32 - 60).max(row);
+    let per_col = ((usable - 8) / row).max(1) as usize;
+    let n_cols = entries.len().div_ceil(per_col).max(1) as i32;
+    let strip_w = match corner {
+        Corner::Outside => ((col_w * n_cols + 16) as u32).min(aw / 2).max(60),
+        Corner::TopLeft => 0,
+    };
+    Ok(LegendLayout {
+        row,
+        col_w,
+        per_col,
+        strip_w,
+    })
+}
+
+/// The corners of a regular octagon of radius `r` around `c` (pixels).
+fn octagon(c: (i32, i32), r: f64) -> Vec<(i32, i32)> {
+    (0..8)
+        .map(|k| {
+            let t = std::f64::consts::PI * (k as f64 + 0.5) / 4.0;
+            (
+                c.0 + (r * t.cos()).round() as i32,
+                c.1 + (r * t.sin()).round() as i32,
+            )
+        })
+        .collect()
 }
 
 /// A vertical arrow in pixels (`from` and `to` share x), head at `to`.

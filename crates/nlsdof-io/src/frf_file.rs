@@ -93,14 +93,24 @@ pub fn read_channel(
     key: &str,
     fs: Option<f64>,
 ) -> Result<(f64, Vec<f64>), FrfFileError> {
-    if crate::uff_convert::is_uff(path) {
-        return read_uff_channel(path, key, fs);
+    use crate::input::Format;
+    // the format from the content (the one reader layer, crate::input)
+    let format = crate::input::detect_file(path).map_err(|source| FrfFileError::Read {
+        path: path.into(),
+        source,
+    })?;
+    match format {
+        Format::Uff => return read_uff_channel(path, key, fs),
+        Format::Lvm => return read_lvm_channel(path, key, fs),
+        Format::Other(what) => {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: format!("this is {what}"),
+            })
+        }
+        _ => {}
     }
-    let is_mat = path
-        .extension()
-        .map(|e| e.eq_ignore_ascii_case("mat"))
-        .unwrap_or(false);
-    if is_mat {
+    if format == Format::Mat {
         let var = if key.parse::<usize>().is_ok() {
             None
         } else {
@@ -118,6 +128,87 @@ pub fn read_channel(
     let th = read_time_history(path, fs)?;
     let v = th.channel(key, path)?.to_vec();
     Ok((th.fs, v))
+}
+
+/// A channel of a LabVIEW `.lvm` file: the column named `key`
+/// (case-insensitive) or the `key`-th channel from 1 (the columns after
+/// `X_Value`, which is the time), sampled at the rate of `X_Value` (or at
+/// `fs` when the file has no `X_Value`).
+fn read_lvm_channel(
+    path: &Path,
+    key: &str,
+    fs: Option<f64>,
+) -> Result<(f64, Vec<f64>), FrfFileError> {
+    use crate::table_file::{find_column, listing, read_picked, TableError};
+    let table = read_picked(path, &|names: &[String], header: bool| {
+        let t = crate::input::TIME_COLUMNS
+            .iter()
+            .find_map(|n| find_column(names, header, n).filter(|_| header));
+        let channels: Vec<usize> = (0..names.len())
+            .filter(|&i| Some(i) != t && !names[i].is_empty())
+            .collect();
+        let by_name = names
+            .iter()
+            .position(|n| !n.is_empty() && n.eq_ignore_ascii_case(key.trim()));
+        let by_number = key
+            .trim()
+            .parse::<usize>()
+            .ok()
+            .and_then(|k| k.checked_sub(1))
+            .and_then(|k| channels.get(k).copied());
+        let c = by_name.or(by_number).ok_or_else(|| TableError::Column {
+            path: path.into(),
+            message: format!(
+                "no channel {:?} (channels by name or number from 1: {})",
+                crate::text::shown(key),
+                channels
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &i)| format!("{} {}", k + 1, names[i]))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })?;
+        match (t, fs) {
+            (Some(t), None) => Ok(vec![c, t]),
+            (None, Some(_)) => Ok(vec![c]),
+            (Some(_), Some(f)) => Err(TableError::Column {
+                path: path.into(),
+                message: format!("the file has a time column (X_Value); --fs {f} would contradict it (drop --fs)"),
+            }),
+            (None, None) => Err(TableError::Column {
+                path: path.into(),
+                message: format!(
+                    "no time column (X_Value) among {}: give the sampling frequency (--fs HZ)",
+                    listing(names, header)
+                ),
+            }),
+        }
+    })
+    .map_err(|e| FrfFileError::Content {
+        path: path.into(),
+        message: {
+            let m = e.to_string();
+            let p = format!("{}: ", path.display());
+            m.strip_prefix(&p).unwrap_or(&m).to_string()
+        },
+    })?;
+    let mut cols = table.columns.into_iter();
+    let values = cols.next().unwrap_or_default();
+    let rate = match (cols.next(), fs) {
+        (Some(t), _) => {
+            let lines = vec![0; t.len()];
+            uniform_fs(path, &t, &lines)?
+        }
+        (None, Some(f)) => f,
+        (None, None) => {
+            return Err(FrfFileError::Content {
+                path: path.into(),
+                message: "no sampling frequency: give --fs HZ".into(),
+            })
+        }
+    };
+    Ok((rate, values))
 }
 
 /// A channel of a universal file (see the module documentation): the real
@@ -195,7 +286,7 @@ pub fn read_uff_channel(
 /// `dataset`, see the module documentation) or else an FRF CSV table
 /// ([`read_frf_csv`], where `dataset` must be `None`).
 pub fn read_frf(path: &Path, dataset: Option<&str>) -> Result<FrfTable, FrfFileError> {
-    if crate::uff_convert::is_uff(path) {
+    if crate::input::is_uff_file(path) {
         return read_frf_uff(path, dataset);
     }
     if let Some(d) = dataset {
@@ -306,12 +397,25 @@ fn parse_num(path: &Path, line: usize, field: &str) -> Result<f64, FrfFileError>
     Ok(v)
 }
 
+/// The file's text (UTF-8, or Latin-1/Windows-1252), at most
+/// [`crate::text::MAX_TEXT_BYTES`]; a binary file is refused naming what
+/// it is.
+fn read_text(path: &Path) -> Result<String, FrfFileError> {
+    crate::text::read_text(path).map_err(|e| match e {
+        crate::text::TextFileError::Read(source) => FrfFileError::Read {
+            path: path.into(),
+            source,
+        },
+        e => FrfFileError::Content {
+            path: path.into(),
+            message: e.to_string(),
+        },
+    })
+}
+
 /// Reads an FRF CSV table (see the module documentation).
 pub fn read_frf_csv(path: &Path) -> Result<FrfTable, FrfFileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| FrfFileError::Read {
-        path: path.into(),
-        source,
-    })?;
+    let text = read_text(path)?;
     parse_frf_csv(&text, path)
 }
 
@@ -519,10 +623,7 @@ pub fn read_time_history(path: &Path, fs: Option<f64>) -> Result<TimeHistory, Fr
             });
         }
     }
-    let text = std::fs::read_to_string(path).map_err(|source| FrfFileError::Read {
-        path: path.into(),
-        source,
-    })?;
+    let text = read_text(path)?;
     parse_time_history(&text, path, fs)
 }
 
@@ -759,6 +860,33 @@ pub fn parse_polytec_sweep(bytes: &[u8], path: &Path) -> Result<Vec<SweepRun>, F
         return Err(FrfFileError::Empty { path: path.into() });
     }
     Ok(runs)
+}
+
+/// The input and output channels of an FRF estimate (`nlsdof
+/// frf-estimate`, Python `frf_estimate`) with their common sampling
+/// frequency, Hz: `input_key` of `input` and `output_key` of `output`
+/// (another file, e.g. a Polytec export per channel) or of `input`. The
+/// output channel defaults to 1 in another file, else 2. Sampling
+/// frequencies that differ (by more than 1e-9 relative) are an error
+/// naming both.
+pub fn read_channel_pair(
+    input: &Path,
+    input_key: &str,
+    output: Option<&Path>,
+    output_key: Option<&str>,
+    fs: Option<f64>,
+) -> Result<(f64, Vec<f64>, Vec<f64>), FrfFileError> {
+    let (fs_in, x) = read_channel(input, input_key, fs)?;
+    let out_path = output.unwrap_or(input);
+    let out_key = output_key.unwrap_or(if output.is_some() { "1" } else { "2" });
+    let (fs_out, y) = read_channel(out_path, out_key, fs)?;
+    if (fs_in - fs_out).abs() > 1e-9 * fs_in {
+        return Err(FrfFileError::Content {
+            path: out_path.into(),
+            message: format!("sampling frequencies differ: input {fs_in} Hz, output {fs_out} Hz"),
+        });
+    }
+    Ok((fs_in, x, y))
 }
 
 #[cfg(test)]

@@ -17,6 +17,9 @@
 //!   at 90° phase per level) for `nlsdof fit --phase-resonance`.
 //! * [`table_file`] — numeric columns of a delimited table chosen by name or
 //!   index (recorded input/output pairs for `nlsdof fit-time`).
+//! * [`input`] — the one reader layer: the format of a data file from its
+//!   content (CSV, LabVIEW `.lvm`, Polytec ASCII, MAT v5, UFF 58), and a
+//!   time history or named columns read from any of them.
 //! * [`uff58`] — Universal File Format dataset 58 / 58b (measured functions
 //!   of vibration test systems: time responses, spectra, FRFs, coherences):
 //!   reader of ASCII and binary files, ASCII and binary writer.
@@ -26,6 +29,7 @@ pub mod bounds_file;
 pub mod csv_table;
 pub mod error;
 pub mod frf_file;
+pub mod input;
 pub mod mat5;
 pub mod model_file;
 pub mod phase_resonance_data;

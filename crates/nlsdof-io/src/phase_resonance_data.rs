@@ -118,9 +118,15 @@ pub fn parse_csv(
 
 /// Reads phase-resonance points from a CSV file.
 pub fn read_csv(path: &Path, opts: &ReadOptions) -> Result<PrDataset, PhaseResonanceDataError> {
-    let text = std::fs::read_to_string(path).map_err(|source| PhaseResonanceDataError::Read {
-        path: path.into(),
-        source,
+    let text = crate::text::read_text(path).map_err(|e| match e {
+        crate::text::TextFileError::Read(source) => PhaseResonanceDataError::Read {
+            path: path.into(),
+            source,
+        },
+        e => PhaseResonanceDataError::Read {
+            path: path.into(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+        },
     })?;
     parse_csv(&text, path, opts)
 }

@@ -262,24 +262,17 @@ fn check_fs(path: &Path, fs: Option<f64>) -> Result<(), SignalFileError> {
     Ok(())
 }
 
-/// Reads a signal, choosing the format by extension (`.mat` → MAT v5,
-/// `.uff`/`.unv` → universal file dataset 58, anything else → CSV). `fs`
-/// is the sampling frequency for a one-column signal; `var` the MAT
-/// variable name, or the UFF dataset ([`read_uff`]).
+/// Reads a signal of any format, decided from the file's content
+/// ([`crate::input::read_signal`]: CSV, LabVIEW `.lvm`, Polytec ASCII, MAT
+/// v5, universal file). `fs` is the sampling frequency for a signal
+/// without a time column; `var` the column (CSV/LVM/Polytec header name),
+/// the MAT variable name, or the UFF dataset ([`read_uff`]).
 pub fn read_signal(
     path: &Path,
     fs: Option<f64>,
     var: Option<&str>,
 ) -> Result<Signal, SignalFileError> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    match ext.as_str() {
-        "mat" => read_mat(path, fs, var),
-        "uff" | "unv" => read_uff(path, fs, var),
-        _ => read_csv(path, fs),
-    }
+    crate::input::read_signal(path, var, fs)
 }
 
 /// A time history from a universal file (dataset 58 or 58b, read by
@@ -863,7 +856,7 @@ pub fn write_signal_csv(path: &Path, t0: f64, fs: f64, values: &[f64]) -> Result
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn write(dir: &Path, name: &str, text: &str) -> PathBuf {

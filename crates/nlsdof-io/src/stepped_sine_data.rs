@@ -101,6 +101,10 @@ pub enum SteppedSineDataError {
         line: usize,
         message: String,
     },
+    /// The file's format or layout is not what was expected: what it is
+    /// and what to do.
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
     #[error("{path}: no file named frf_<A>g.txt in the directory")]
     NoBeamFiles { path: PathBuf },
     #[error("{path}: {source}")]
@@ -175,7 +179,28 @@ pub fn parse_csv(
     path: &Path,
     opts: &ReadOptions,
 ) -> Result<Dataset, SteppedSineDataError> {
-    let mut rows = CsvRows::new(text.as_bytes(), CsvOptions::default());
+    // a European spreadsheet export: `;` or tab between fields, decimal
+    // commas (then a comma is only ever a decimal comma)
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .unwrap_or("");
+    let separator = if !first.contains(',') && first.contains(';') {
+        Some(Separator::Semicolon)
+    } else if !first.contains(',') && first.contains('\t') {
+        Some(Separator::Tab)
+    } else {
+        None
+    };
+    let text: std::borrow::Cow<str> = match separator {
+        Some(_) if text.contains(',') => text.replace(',', ".").into(),
+        _ => text.into(),
+    };
+    let csv_opts = separator.map_or(CsvOptions::default(), |s| {
+        CsvOptions::default().with_separator(s)
+    });
+    let mut rows = CsvRows::new(text.as_bytes(), csv_opts);
     let read_err = |e: CsvReadError| SteppedSineDataError::Read {
         path: path.into(),
         source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
@@ -189,9 +214,16 @@ pub fn parse_csv(
     let cols = lowercase(header);
     let find = |name: &'static str| column(&cols, name);
     let need = |name: &'static str| {
-        find(name).ok_or(SteppedSineDataError::MissingColumn {
-            path: path.into(),
-            column: name,
+        find(name).ok_or_else(|| match crate::input::separator_hint(header) {
+            // the separator explains the missing column: say so first
+            Some(hint) => SteppedSineDataError::Format {
+                path: path.into(),
+                message: format!("missing column '{name}': {hint}"),
+            },
+            None => SteppedSineDataError::MissingColumn {
+                path: path.into(),
+                column: name,
+            },
         })
     };
     let (cl, cg, cf, ca) = (
@@ -230,9 +262,17 @@ pub fn parse_csv(
 
 /// Reads the long CSV format from a file.
 pub fn read_csv(path: &Path, opts: &ReadOptions) -> Result<Dataset, SteppedSineDataError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SteppedSineDataError::Read {
-        path: path.into(),
-        source,
+    // UTF-8, or Latin-1/Windows-1252 (read, not refused); binary refused
+    // naming what it is
+    let text = crate::text::read_text(path).map_err(|e| match e {
+        crate::text::TextFileError::Read(source) => SteppedSineDataError::Read {
+            path: path.into(),
+            source,
+        },
+        e => SteppedSineDataError::Format {
+            path: path.into(),
+            message: e.to_string(),
+        },
     })?;
     parse_csv(&text, path, opts)
 }

@@ -33,6 +33,12 @@ pub enum TableError {
     Empty { path: PathBuf },
     #[error("{path}: {what}")]
     NotText { path: PathBuf, what: String },
+    #[error("{path}: the file has {bytes} bytes; a table is read up to {max} bytes (4 GiB: every selected value is kept in memory; split the record or keep only the columns needed)", max = MAX_FILE_BYTES)]
+    TooLarge { path: PathBuf, bytes: u64 },
+    /// A column found but unusable as asked (e.g. no time column), with
+    /// what to do.
+    #[error("{path}: {message}")]
+    Column { path: PathBuf, message: String },
     #[error(
         "{path}: no column \"{wanted}\" (columns: {found}; give a header name or a 0-based index)", wanted = crate::text::shown(.wanted), found = crate::text::shown(.found)
     )]
@@ -79,6 +85,7 @@ fn push_row(
     line: u64,
     fields: &[String],
     unq: fn(&str) -> &str,
+    decimal_comma: bool,
 ) -> Result<(), TableError> {
     for (c, &i) in idx.iter().enumerate() {
         let Some(f) = fields.get(i).map(|f| unq(f)) else {
@@ -89,7 +96,7 @@ fn push_row(
                 fields: fields.len(),
             });
         };
-        match parse_num(f) {
+        match parse_num(f).or_else(|| decimal_comma.then(|| comma_num(f)).flatten()) {
             Some(v) => columns[c].push(v),
             None => {
                 return Err(TableError::NotANumber {
@@ -108,6 +115,15 @@ fn parse_num(s: &str) -> Option<f64> {
     s.trim().parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// A number written with a decimal comma (`-2,25`, `1,5E-3`): one comma,
+/// no point. Only tried when the fields are not comma-separated.
+fn comma_num(s: &str) -> Option<f64> {
+    let s = s.trim();
+    (s.matches(',').count() == 1 && !s.contains('.'))
+        .then(|| parse_num(&s.replace(',', ".")))
+        .flatten()
+}
+
 /// Reads the columns `wanted` (names or 0-based indices) of a table file.
 ///
 /// A regular file is streamed, never held whole (issue 30, class 10: a
@@ -118,22 +134,112 @@ fn parse_num(s: &str) -> Option<f64> {
 /// Anything that cannot be read twice (a pipe, a device) is read into
 /// memory first, as before.
 pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
-    let read_err = |source| TableError::Read {
-        path: path.into(),
-        source,
-    };
-    if std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
-        parse_source(&|| std::fs::File::open(path), path, wanted)
-    } else {
-        let bytes = std::fs::read(path).map_err(read_err)?;
-        parse_columns(&bytes, path, wanted)
-    }
+    read_picked(path, &|names: &[String], header: bool| {
+        pick_named(path, names, header, wanted)
+    })
 }
 
 /// [`read_columns`] on bytes in memory (`path` names the data in errors).
 pub fn parse_columns(bytes: &[u8], path: &Path, wanted: &[&str]) -> Result<Table, TableError> {
-    parse_source(&|| Ok(bytes), path, wanted)
+    parse_source(&|| Ok(bytes), path, &|names: &[String], header: bool| {
+        pick_named(path, names, header, wanted)
+    })
 }
+
+/// Chooses the columns to read from the header's `names` (indices as text
+/// when the table has no header line, `header` false).
+pub type Picker<'a> = dyn Fn(&[String], bool) -> Result<Vec<usize>, TableError> + 'a;
+
+/// [`read_columns`] with the columns chosen by `pick` once the header is
+/// known (e.g. a time column among several candidate names).
+pub fn read_picked(path: &Path, pick: &Picker<'_>) -> Result<Table, TableError> {
+    let read_err = |source| TableError::Read {
+        path: path.into(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(read_err)?;
+    if meta.is_file() {
+        if meta.len() > MAX_FILE_BYTES {
+            return Err(TableError::TooLarge {
+                path: path.into(),
+                bytes: meta.len(),
+            });
+        }
+        parse_source(&|| std::fs::File::open(path), path, pick)
+    } else {
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(
+            &mut std::io::Read::take(
+                std::fs::File::open(path).map_err(read_err)?,
+                MAX_FILE_BYTES + 1,
+            ),
+            &mut bytes,
+        )
+        .map_err(read_err)?;
+        if bytes.len() as u64 > MAX_FILE_BYTES {
+            return Err(TableError::TooLarge {
+                path: path.into(),
+                bytes: bytes.len() as u64,
+            });
+        }
+        parse_source(&|| Ok(&bytes[..]), path, pick)
+    }
+}
+
+/// The header names of the table as a message lists them: `name (index)`.
+pub fn listing(names: &[String], header: bool) -> String {
+    names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| !n.is_empty())
+        .map(|(i, n)| {
+            if header {
+                format!("{n} ({i})")
+            } else {
+                n.clone()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Index of the column `wanted`: a header name (case-insensitive) or a
+/// 0-based index.
+pub fn find_column(names: &[String], header: bool, wanted: &str) -> Option<usize> {
+    let wt = wanted.trim();
+    let by_name = names
+        .iter()
+        .position(|n| !n.is_empty() && n.eq_ignore_ascii_case(wt));
+    let by_index = wt
+        .parse::<usize>()
+        .ok()
+        .filter(|&i| i < names.len() && !(header && names[i].is_empty()));
+    by_name.or(by_index)
+}
+
+fn pick_named(
+    path: &Path,
+    names: &[String],
+    header: bool,
+    wanted: &[&str],
+) -> Result<Vec<usize>, TableError> {
+    wanted
+        .iter()
+        .map(|w| {
+            find_column(names, header, w).ok_or_else(|| TableError::MissingColumn {
+                path: path.into(),
+                wanted: w.trim().to_string(),
+                found: listing(names, header),
+            })
+        })
+        .collect()
+}
+
+/// Largest table file read: 4 GiB. The file is streamed (a line at a time),
+/// but every row of the selected columns is kept as 8-byte numbers and
+/// a larger text file means more than ~10^8 rows, beyond what the analyses
+/// handle in reasonable time and memory.
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
 const END_OF_HEADER: &str = "***End_of_Header***";
 
@@ -184,7 +290,7 @@ fn for_each_line<R: std::io::Read>(
 fn parse_source<R: std::io::Read>(
     open: &dyn Fn() -> std::io::Result<R>,
     path: &Path,
-    wanted: &[&str],
+    pick: &Picker<'_>,
 ) -> Result<Table, TableError> {
     let read_err = |source| TableError::Read {
         path: path.into(),
@@ -321,60 +427,46 @@ fn parse_source<R: std::io::Read>(
     let Some((head_no, head)) = head else {
         return Err(TableError::Empty { path: path.into() });
     };
-    let header = head.iter().any(|f| !f.is_empty() && parse_num(f).is_none());
+    let decimal_comma = separator != Separator::Comma;
+    let header = head.iter().any(|f| {
+        !f.is_empty() && parse_num(f).is_none() && !(decimal_comma && comma_num(f).is_some())
+    });
     let names: Vec<String> = if header {
         head.clone()
     } else {
         (0..head.len()).map(|i| i.to_string()).collect()
     };
-    let shown = || {
-        names
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| !n.is_empty())
-            .map(|(i, n)| {
-                if header {
-                    format!("{n} ({i})")
-                } else {
-                    n.clone()
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let mut idx = Vec::with_capacity(wanted.len());
-    for w in wanted {
-        let wt = w.trim();
-        let by_name = names
-            .iter()
-            .position(|n| !n.is_empty() && n.eq_ignore_ascii_case(wt));
-        let by_index = wt
-            .parse::<usize>()
-            .ok()
-            .filter(|&i| i < names.len() && !(header && names[i].is_empty()));
-        match by_name.or(by_index) {
-            Some(i) => idx.push(i),
-            None => {
-                return Err(TableError::MissingColumn {
-                    path: path.into(),
-                    wanted: wt.to_string(),
-                    found: shown(),
-                })
-            }
-        }
-    }
+    let idx = pick(&names, header)?;
     // reserved once: a column never doubles its capacity (and copies
     // itself) while it grows
-    let mut columns: Vec<Vec<f64>> = (0..wanted.len())
+    let mut columns: Vec<Vec<f64>> = (0..idx.len())
         .map(|_| Vec::with_capacity(rows_max))
         .collect();
     if !header {
-        push_row(&mut columns, &idx, &names, path, head_no, &head, |f| f)?;
+        push_row(
+            &mut columns,
+            &idx,
+            &names,
+            path,
+            head_no,
+            &head,
+            |f| f,
+            decimal_comma,
+        )?;
     }
     // the fields are parsed where they are, not copied (1e7 rows)
     while let Some((line, fields)) = rows.next_row().map_err(row_err)? {
         if data(line) {
-            push_row(&mut columns, &idx, &names, path, line, fields, unquote)?;
+            push_row(
+                &mut columns,
+                &idx,
+                &names,
+                path,
+                line,
+                fields,
+                unquote,
+                decimal_comma,
+            )?;
         }
     }
     if columns.first().map(|c| c.is_empty()).unwrap_or(true) {

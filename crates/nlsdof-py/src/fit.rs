@@ -10,6 +10,7 @@ use nlsdof::identification::{
 };
 use nlsdof::identification::{Parameter, Record};
 use nlsdof_io::stepped_sine_data::{self as data_io, AmplitudeKind, Columns, ReadOptions, Runs};
+use nlsdof_report::intervals::IntervalView;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -268,6 +269,9 @@ struct FitState {
     mass: Option<f64>,
     source: Option<String>,
     integer: bool,
+    /// `intervals="all"` (absent in states pickled before it: one).
+    #[serde(default)]
+    all_intervals: bool,
 }
 
 /// The pickled state of each curve: level, gamma, direction, omegas (rad/s),
@@ -287,6 +291,12 @@ type CurveStates = Vec<(
 /// velocity (m/s) or acceleration (m/s^2), converted to displacement;
 /// `gamma_in_g`: levels in g; `peak_to_peak`: levels and amplitudes are
 /// peak-to-peak (the paper's tables).
+///
+/// >>> import os, tempfile, nlsdof
+/// >>> p = os.path.join(tempfile.mkdtemp(), "d.csv")
+/// >>> _ = open(p, "w").write("level,gamma,f_hz,amplitude\n1,0.5,5.0,0.01\n1,0.5,5.1,0.02\n1,0.5,5.2,0.015\n")
+/// >>> nlsdof.read_stepped_sine(p).curves  # (level, gamma m/s^2, sweep)
+/// [('1', 0.5, 'up')]
 #[pyfunction]
 #[pyo3(signature = (path, velocity=false, acceleration=false, gamma_in_g=false, peak_to_peak=false))]
 pub fn read_stepped_sine(
@@ -307,6 +317,11 @@ pub fn read_stepped_sine(
 /// Reads a beam directory of Polytec `frf_<A>g.txt` exports (as `nlsdof fit
 /// --beam-dir`); `runs`: "up" (default, as the CLI's `--runs`), "down" or
 /// "both".
+///
+/// >>> import nlsdof
+/// >>> d = nlsdof.read_beam_dir("../shared/data/clamped-beam-duffing-catarinaluz/cc_beam_no_magnet_24C")
+/// >>> d.curves[:2]
+/// [('0.04g', 0.392266, 'up'), ('0.06g', 0.5883989999999999, 'up')]
 #[pyfunction]
 #[pyo3(signature = (path, runs="up"))]
 pub fn read_beam_dir(path: PathBuf, runs: &str) -> PyResult<SteppedSineData> {
@@ -461,9 +476,31 @@ pub(crate) fn dataset(obj: &Bound<'_, PyAny>) -> PyResult<(Dataset, Option<Strin
 /// "relative"; `jump_weight`: None (auto), 0 (off) or lambda;
 /// `jump_reading`: "auto", "exact" or "censored" (`--jump-reading`);
 /// `integer`: also fit the integer exponent pairs around the optimum
-/// (`--integer`).
+/// (`--integer`); `intervals`: "one" (default: one 95 % interval per
+/// parameter in `report()`, named by its method) or "all" (`--intervals
+/// all`: also every other interval, with what it leaves out);
+/// `from_inspect`: as `--from-inspect`, start also from the exponents of
+/// `nlsdof.inspect` on the same data (the landscape node nearest to them
+/// joins the race).
+///
+/// Long work: Ctrl-C raises `KeyboardInterrupt` within a fraction of a
+/// second (nothing is returned). `progress`: None (default: quiet), True (a
+/// tqdm bar per stage when tqdm is installed, else one line on stderr), or
+/// a callable `progress(stage, done, total)` called on this thread at most
+/// every 20 ms and at each stage's start (stages "landscape", "output
+/// error", "output error on all points", "decisions", "escalation"); an
+/// exception it raises stops the fit and propagates.
+///
+/// >>> import numpy as np, nlsdof
+/// >>> wing = nlsdof.Model.from_toml("examples/har-wing.toml")
+/// >>> f = np.linspace(5.3, 5.5, 25)
+/// >>> data = {"level": ["1"] * 25, "gamma": [0.41] * 25, "f_hz": f,
+/// ...         "amplitude": wing.sweep(0.41, f).amplitude}
+/// >>> r = nlsdof.fit(data, model="duffing")
+/// >>> r.converged, r.parameters["alpha"]["unit"]
+/// (True, '1/s^2')
 #[pyfunction]
-#[pyo3(signature = (data, model="generalised", *, mass=None, fix=None, free=None, bounds=None, sign="data", phase=None, phase_weight=None, weighting="absolute", jump_weight=None, jump_reading="auto", integer=false, grid=None, refine=None, starts=1, seed=1))]
+#[pyo3(signature = (data, model="generalised", *, mass=None, fix=None, free=None, bounds=None, sign="data", phase=None, phase_weight=None, weighting="absolute", jump_weight=None, jump_reading="auto", integer=false, grid=None, refine=None, starts=1, seed=1, intervals="one", progress=None, from_inspect=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -484,7 +521,11 @@ pub fn fit(
     refine: Option<usize>,
     starts: usize,
     seed: u64,
+    intervals: &str,
+    progress: Option<&Bound<'_, PyAny>>,
+    from_inspect: bool,
 ) -> PyResult<FitResult> {
+    let all_intervals = interval_view(intervals)? == IntervalView::All;
     let kind = ModelKind::parse(model).ok_or_else(|| {
         let all: Vec<&str> = ModelKind::ALL.iter().map(|k| k.name()).collect();
         value_error(format!(
@@ -607,9 +648,18 @@ pub fn fit(
     }
     plan.starts = starts;
     plan.seed = seed;
-    let id = py
-        .detach(|| identify(&data, &plan, &|_| {}))
-        .map_err(value_error)?;
+    if from_inspect {
+        // as `fit --from-inspect`: inspect's exponents join the race
+        let r = nlsdof::identification::inspect::inspect(&data, &Default::default())
+            .map_err(|e| value_error(format!("from_inspect: {e}")))?;
+        plan.start_exponents = Some(r.exponent_start());
+    }
+    // Ctrl-C stops it (KeyboardInterrupt), progress= follows the stages
+    let id = crate::interrupt::run(py, progress, kind.name(), |cancel, rep| {
+        plan.lm.cancel = cancel;
+        identify(&data, &plan, &|p| rep.identify(p))
+    })?
+    .map_err(value_error)?;
     // checked here so that `model` cannot fail later
     let physical = id
         .fit
@@ -622,6 +672,16 @@ pub fn fit(
         physical,
         source,
         integer,
+        all_intervals,
+    })
+}
+
+/// `intervals=`: "one" or "all" (`fit --intervals`).
+fn interval_view(intervals: &str) -> PyResult<IntervalView> {
+    IntervalView::parse(intervals).ok_or_else(|| {
+        value_error(format!(
+            "intervals {intervals:?} is not allowed: use \"one\" (one 95 % interval per parameter) or \"all\""
+        ))
     })
 }
 
@@ -678,6 +738,8 @@ pub struct FitResult {
     source: Option<String>,
     /// Fitted with `integer=True` (the documents add the integer nodes).
     integer: bool,
+    /// `intervals="all"`: `report()` shows every interval computed.
+    all_intervals: bool,
 }
 
 #[pymethods]
@@ -703,6 +765,12 @@ impl FitResult {
             let d = PyDict::new(py);
             d.set_item("value", res.theta[j])?;
             d.set_item("interval", interval)?;
+            // the method of `interval` (the linearised one; `profile()`
+            // gives the output-error profile)
+            d.set_item(
+                "interval_method",
+                interval.map(|_| nlsdof_report::intervals::WALD),
+            )?;
             d.set_item("unit", info.unit)?;
             d.set_item(
                 "status",
@@ -777,6 +845,8 @@ impl FitResult {
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut doc = nlsdof_report::fit::identification_document(&self.id, self.mass)
             .map_err(value_error)?;
+        // parameters[].interval: the one interval reported, with its method
+        nlsdof_report::intervals::add_chosen_json(&mut doc, &self.id.fit, &[]);
         if self.integer {
             doc["integer_pairs"] = nlsdof_report::fit::integer_nodes_json(&self.id);
         }
@@ -793,15 +863,16 @@ impl FitResult {
     /// until `(P - P*)/sigma^2` crosses chi2_1(0.95) = 3.84. Returns the
     /// entry of `nlsdof fit --profile --json`: `estimate`, `ci95` (None:
     /// open), `fits`, `points`.
-    #[pyo3(signature = (parameter="rho", step=None, max_steps=24))]
+    #[pyo3(signature = (parameter="rho", step=None, max_steps=24, *, progress=None))]
     fn profile<'py>(
         &self,
         py: Python<'py>,
         parameter: &str,
         step: Option<f64>,
         max_steps: usize,
+        progress: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        use nlsdof::identification::profile::{default_step, output_error_profile};
+        use nlsdof::identification::profile::{default_step, output_error_profile_with};
         let p = match parameter.to_ascii_lowercase().as_str() {
             "rho" => Parameter::Rho,
             "eta" => Parameter::Eta,
@@ -813,16 +884,39 @@ impl FitResult {
         };
         let id = &self.id;
         let step = step.unwrap_or_else(|| default_step(&id.fit, p));
-        let prof = py
-            .detach(|| output_error_profile(&id.data, &id.spec, &id.fit.theta, p, step, max_steps))
-            .map_err(value_error)?;
+        let what = format!("profile {}", p.info().name);
+        let prof = crate::interrupt::run(py, progress, &what, |cancel, rep| {
+            rep.stage("local fits", 1 + 2 * max_steps);
+            output_error_profile_with(
+                &id.data,
+                &id.spec,
+                &id.fit.theta,
+                p,
+                step,
+                max_steps,
+                cancel,
+                &|done, total| rep.at(done, total),
+            )
+        })?
+        .map_err(value_error)?;
         let doc = nlsdof_report::fit::profiles_json(std::slice::from_ref(&prof));
         to_py(py, &doc[p.info().name])
     }
-    /// The text report of `nlsdof fit`.
-    fn report(&self) -> PyResult<String> {
+    /// The text report of `nlsdof fit`: one 95 % interval per parameter,
+    /// named by its method (Wald: `profile()` computes the output-error
+    /// profile separately); `intervals="all"` (default: as given to `fit`)
+    /// adds every other interval with what it leaves out, as `nlsdof fit
+    /// --intervals all`.
+    #[pyo3(signature = (intervals=None))]
+    fn report(&self, intervals: Option<&str>) -> PyResult<String> {
+        let view = match intervals {
+            Some(v) => interval_view(v)?,
+            None if self.all_intervals => IntervalView::All,
+            None => IntervalView::One,
+        };
         let mut text =
-            nlsdof_report::fit::identification_report(&self.id, self.mass).map_err(value_error)?;
+            nlsdof_report::fit::identification_report_with(&self.id, self.mass, &[], view)
+                .map_err(value_error)?;
         if self.integer {
             text.push_str(&nlsdof_report::fit::integer_nodes_text(&self.id));
         }
@@ -863,6 +957,30 @@ impl FitResult {
             .import("nlsdof.plot")?
             .call_method1("fit", (slf, ax))
     }
+    /// The exponent landscape (the document of `nlsdof fit --landscape
+    /// FILE.json`): `rho`, `eta` (nodes), `cost` (`cost[j][i]` at
+    /// `(rho[i], eta[j])`, None where not solvable), `minima`, `fitted`,
+    /// `with_phase`.
+    fn landscape<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let bytes =
+            nlsdof_report::landscape::render(&self.id, nlsdof_report::landscape::Kind::Json)
+                .map_err(value_error)?;
+        let doc: serde_json::Value = serde_json::from_slice(&bytes).map_err(value_error)?;
+        to_py(py, &doc)
+    }
+    /// The exponent landscape as the CLI's `--landscape FILE.png` draws it
+    /// (matplotlib; `nlsdof.plot.landscape`): a map over (rho, eta), a 1-D
+    /// profile when one exponent is fixed; ValueError for a single node.
+    /// Returns the Axes.
+    #[pyo3(signature = (ax=None))]
+    fn plot_landscape<'py>(
+        slf: &Bound<'py, Self>,
+        ax: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        slf.py()
+            .import("nlsdof.plot")?
+            .call_method1("landscape", (slf, ax))
+    }
     /// `fitted_curves()` as a pandas DataFrame (long format, one row per
     /// measured point; needs pandas).
     fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -895,6 +1013,7 @@ impl FitResult {
             mass: me.mass,
             source: me.source.clone(),
             integer: me.integer,
+            all_intervals: me.all_intervals,
         };
         let mut bytes = Vec::new();
         ciborium::into_writer(&state, &mut bytes).map_err(value_error)?;
@@ -919,6 +1038,7 @@ impl FitResult {
             physical,
             source: s.source,
             integer: s.integer,
+            all_intervals: s.all_intervals,
         })
     }
     /// Equal when the two identifications are the same bit for bit (data,

@@ -54,5 +54,5 @@ pub fn inspect<'py>(
         t.elapsed().as_secs_f64(),
     )
     .map_err(value_error)?;
-    to_py(py, &doc)
+    crate::document::report(to_py(py, &doc)?, "inspect")
 }

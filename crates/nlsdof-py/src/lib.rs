@@ -9,19 +9,27 @@
 
 mod arrays;
 mod convert;
+mod document;
 mod fit;
 mod inspect;
+mod interrupt;
 mod model;
+mod readers;
 mod signal;
 mod simulation;
 mod time;
 mod uff;
+mod workflows;
 
 use pyo3::prelude::*;
 
 /// The shape factor of the equivalent coefficients (paper Eq 12/24):
 /// `g(mu) = 2 Gamma((3+mu)/2) / (sqrt(pi) Gamma(2+mu/2))`, for `mu > -3`
 /// (`g(0) = 1`, `g(2) = 3/4`, `g(-1) = 4/pi`).
+///
+/// >>> import nlsdof
+/// >>> round(nlsdof.g(0.0), 12), nlsdof.g(2.0)
+/// (1.0, 0.75)
 #[pyfunction]
 fn g(mu: f64) -> PyResult<f64> {
     nlsdof::power_law::g(mu).map_err(convert::value_error)
@@ -51,6 +59,13 @@ fn _nlsdof(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(inspect::inspect, m)?)?;
     m.add_function(wrap_pyfunction!(uff::read_uff, m)?)?;
     m.add_function(wrap_pyfunction!(uff::write_uff, m)?)?;
+    m.add_function(wrap_pyfunction!(readers::read_lvm, m)?)?;
+    m.add_function(wrap_pyfunction!(readers::read_polytec, m)?)?;
+    m.add_function(wrap_pyfunction!(readers::read_polytec_sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(readers::read_mat, m)?)?;
+    m.add_function(wrap_pyfunction!(workflows::frf_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(workflows::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(workflows::signal, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -8,7 +8,7 @@ use crate::simulation::Simulation;
 use nlsdof::identification::time_domain::{
     simulate_states, stated_integration_error, InputInterpolation, TimeModel, MAX_SUBSTEPS,
 };
-use nlsdof::simulation::{simulate_record, RecordMethod, Sample, State};
+use nlsdof::simulation::{simulate_record_cancellable, RecordMethod, Sample, State};
 use nlsdof::stepped_sine::{run_sweeps, RigOptions};
 use nlsdof::{level_responses, AsNormalised, ForcedResponse};
 use nlsdof_io::model_file::{ModelDocument, Provenance, SignalMap};
@@ -39,6 +39,11 @@ use std::path::PathBuf;
 /// (and refuse a non-zero `input_offset` or a negative gain, as the CLI);
 /// `simulate` applies gain and input offset (the recorded output is
 /// `x + output_offset`). Models pickle, deep-copy and compare by value.
+///
+/// >>> import nlsdof
+/// >>> m = nlsdof.Model(1.0, 100.0, 0.5, nonlinear_stiffness=(1e3, 3.0))
+/// >>> [round(s.amplitude, 6) for s in m.steady_states(1.0, 1.5)]  # gamma m/s^2, f Hz -> m
+/// [0.080312]
 #[pyclass(frozen, eq, name = "Model", module = "nlsdof")]
 #[derive(Clone, PartialEq)]
 pub struct Model {
@@ -578,33 +583,30 @@ impl Model {
                 .map_err(value_error)?;
             return self.simulation(py, x, v, error, record);
         }
-        let (x, v, error) = py
-            .detach(|| {
-                let mut x = Vec::with_capacity(u.len());
-                let mut v = Vec::with_capacity(u.len());
-                let mut sink = |s: Sample| {
-                    x.push(s.x);
-                    v.push(s.v);
-                };
-                let initial = State { x: x0, v: v0 };
-                simulate_record(model, &u, (gain, 0.0, fs), record, initial, &mut sink)?;
-                // the CLI's check (one implementation in the core): step
-                // doubling on the whole record, for every method
-                let error = if check {
-                    Some(nlsdof::simulation::record_error_estimate(
-                        model,
-                        &u,
-                        (gain, 0.0, fs),
-                        record,
-                        initial,
-                        &x,
-                    )?)
-                } else {
-                    None
-                };
-                Ok::<_, nlsdof::simulation::SimulationError>((x, v, error))
-            })
-            .map_err(value_error)?;
+        // Ctrl-C stops it (KeyboardInterrupt): the default method and the
+        // check poll the flag every 2^16 samples
+        let (x, v, error) = crate::interrupt::run(py, None, "simulate", |cancel, _| {
+            let mut x = Vec::with_capacity(u.len());
+            let mut v = Vec::with_capacity(u.len());
+            let mut sink = |s: Sample| {
+                x.push(s.x);
+                v.push(s.v);
+            };
+            let initial = State { x: x0, v: v0 };
+            let grid = (gain, 0.0, fs);
+            simulate_record_cancellable(model, &u, grid, record, initial, &mut sink, cancel)?;
+            // the CLI's check (one implementation in the core): step
+            // doubling on the whole record, for every method
+            let error = if check {
+                Some(nlsdof::simulation::record_error_estimate_cancellable(
+                    model, &u, grid, record, initial, &x, cancel,
+                )?)
+            } else {
+                None
+            };
+            Ok::<_, nlsdof::simulation::SimulationError>((x, v, error))
+        })?
+        .map_err(value_error)?;
         self.simulation(py, x, v, error, record)
     }
 

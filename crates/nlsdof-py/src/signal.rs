@@ -21,6 +21,13 @@ use std::f64::consts::TAU;
 /// `poles`: number of complex pole pairs or "auto". Returns the document
 /// (dict): `sdof` holds alpha = k/m (1/s^2), delta = c/m (1/s), f_n_hz,
 /// zeta and, when the mass is known, m, k, c.
+///
+/// >>> import numpy as np, nlsdof
+/// >>> f = np.linspace(5.0, 15.0, 201); w = 2 * np.pi * f
+/// >>> h = 1 / ((2 * np.pi * 10) ** 2 - w**2 + 2j * w)  # f_n 10 Hz, delta 2 1/s
+/// >>> r = nlsdof.linear_id(f, h)
+/// >>> round(r["sdof"]["f_n_hz"], 6), round(r["sdof"]["delta"], 6)
+/// (10.0, 2.0)
 #[pyfunction]
 #[pyo3(signature = (f_hz, frf, input="acceleration", output="displacement", mass=None, poles=None, max_poles=20, f_min=None, f_max=None, mode=None, constant=true, proportional=false, weight="uniform", max_iterations=30))]
 #[allow(clippy::too_many_arguments)]
@@ -147,7 +154,46 @@ pub fn linear_id<'py>(
         .detach(|| identify_sdof(&measured, &opts))
         .map_err(value_error)?;
     let used: Vec<f64> = id.points.iter().map(|&i| f[i]).collect();
-    to_py(py, &nlsdof_report::linear_id::json(&id, &used))
+    let out = to_py(py, &nlsdof_report::linear_id::json(&id, &used))?;
+    // beyond the CLI's document: what its figure draws (nlsdof.plot.linear_id)
+    let d = out.cast::<pyo3::types::PyDict>()?;
+    d.set_item(
+        "frf_unit",
+        nlsdof_report::linear_id::frf_unit(opts.input, opts.output),
+    )?;
+    d.set_item(
+        "mobility_unit",
+        nlsdof_report::linear_id::frf_unit(opts.input, OutputKind::Velocity),
+    )?;
+    d.set_item("output_power", opts.output.power())?;
+    d.set_item("f_hz", PyArray1::from_vec(py, used.clone()))?;
+    let h: Vec<numpy::Complex64> = match &id.values {
+        Some(v) => v
+            .iter()
+            .map(|z| numpy::Complex64::new(z.re, z.im))
+            .collect(),
+        None => id
+            .magnitude
+            .iter()
+            .map(|&m| numpy::Complex64::new(m, f64::NAN))
+            .collect(),
+    };
+    d.set_item("frf", PyArray1::from_vec(py, h))?;
+    if let (Some(fit), Some(&f0), Some(&f1)) = (&id.fit, used.first(), used.last()) {
+        let grid: Vec<f64> = (0..=800)
+            .map(|i| f0 + (f1 - f0) * i as f64 / 800.0)
+            .collect();
+        let curve: Vec<numpy::Complex64> = grid
+            .iter()
+            .map(|&f| {
+                let z = fit.eval(TAU * f);
+                numpy::Complex64::new(z.re, z.im)
+            })
+            .collect();
+        d.set_item("fit_f_hz", PyArray1::from_vec(py, grid))?;
+        d.set_item("fit_frf", PyArray1::from_vec(py, curve))?;
+    }
+    crate::document::report(out, "linear_id")
 }
 
 /// An STFT spectrogram: `times` (s, segment centres), `frequencies` (Hz)
@@ -165,6 +211,50 @@ pub struct Spectrogram {
 
 #[pymethods]
 impl Spectrogram {
+    /// Jupyter: the time and frequency ranges (s, Hz) and the largest
+    /// magnitude.
+    fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
+        use numpy::PyArrayMethods;
+        let range = |a: &Py<PyArray1<f64>>| -> PyResult<String> {
+            let r = a.bind(py).readonly();
+            let v = r.as_array();
+            Ok(match (v.first(), v.last()) {
+                (Some(a), Some(b)) => format!("{a} .. {b}"),
+                _ => "&mdash;".into(),
+            })
+        };
+        let peak: f64 = self
+            .magnitude
+            .bind(py)
+            .call_method0("max")
+            .and_then(|m| m.extract())
+            .unwrap_or(f64::NAN);
+        Ok(format!(
+            "<div><b>nlsdof Spectrogram</b> &mdash; {} times x {} frequencies<table>\
+             <tr><th>quantity</th><th>value</th><th>unit</th></tr>\
+             <tr><td>times (segment centres)</td><td>{}</td><td>s</td></tr>\
+             <tr><td>frequencies</td><td>{}</td><td>Hz</td></tr>\
+             <tr><td>max magnitude</td><td>{peak:.6e}</td><td>input unit</td></tr>\
+             </table></div>",
+            self.shape.0,
+            self.shape.1,
+            range(&self.times)?,
+            range(&self.frequencies)?
+        ))
+    }
+
+    /// The magnitude in dB over time (s) and frequency (Hz) as the CLI's
+    /// `spectrogram --plot` draws it (matplotlib; `nlsdof.plot.spectrogram`):
+    /// `ax=None` draws a new figure. Returns the Axes.
+    #[pyo3(signature = (ax=None))]
+    fn plot<'py>(
+        slf: &Bound<'py, Self>,
+        ax: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        slf.py()
+            .import("nlsdof.plot")?
+            .call_method1("spectrogram", (slf, ax))
+    }
     fn __repr__(&self) -> String {
         format!(
             "Spectrogram({} times x {} frequencies)",
@@ -235,6 +325,12 @@ fn stft_options(
 /// `overlap` (fraction of L), a symmetric Hamming window by default (the
 /// paper's), `scaling` "amplitude" (a sine of amplitude A on a bin reads A)
 /// or "psd"; restricted to [`f_min`, `f_max`] Hz when given.
+///
+/// >>> import numpy as np, nlsdof
+/// >>> t = np.arange(3000) / 100.0
+/// >>> s = nlsdof.spectrogram(2.0 * np.sin(2 * np.pi * 5.0 * t), fs=100.0, segments=10, window="hann", periodic=True)
+/// >>> s, round(float(s.magnitude.max()), 3)
+/// (Spectrogram(19 times x 151 frequencies), 2.0)
 #[pyfunction]
 #[pyo3(signature = (x, fs, segments=15, overlap=0.5, window="hamming", periodic=false, nfft=None, detrend="none", scaling="amplitude", f_min=None, f_max=None))]
 #[allow(clippy::too_many_arguments)]
@@ -289,6 +385,12 @@ pub fn spectrogram<'py>(
 /// sampling `fs` Hz) by the paper's Eq 33, `max |s_exp - s_num| / s_exp`
 /// in %, and its robust variant over the bins with `s_exp >= floor x max`;
 /// returns the `compare` block of `nlsdof spectrogram --compare --json`.
+///
+/// >>> import numpy as np, nlsdof
+/// >>> x = np.sin(2 * np.pi * 5.0 * np.arange(3000) / 100.0)
+/// >>> c = nlsdof.compare_spectrograms(x, 1.01 * x, fs=100.0)
+/// >>> round(c["eq33_max_relative_percent"], 6)
+/// 1.0
 #[pyfunction]
 #[pyo3(signature = (measured, model, fs, segments=15, overlap=0.5, window="hamming", periodic=false, nfft=None, detrend="none", scaling="amplitude", f_min=None, f_max=None, floor=0.01))]
 #[allow(clippy::too_many_arguments)]

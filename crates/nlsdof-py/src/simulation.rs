@@ -68,6 +68,40 @@ impl Simulation {
             .map(|it| it.into_any())
     }
 
+    /// Jupyter: samples, peak displacement (m) and velocity (m/s), the
+    /// integration-error estimate and the status (ok / warning).
+    fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
+        use numpy::PyArrayMethods;
+        let peak = |a: &Py<PyArray1<f64>>| -> PyResult<f64> {
+            let r = a.bind(py).readonly();
+            Ok(r.as_array().iter().fold(0.0_f64, |m, v| m.max(v.abs())))
+        };
+        let (px, pv) = (peak(&self.x)?, peak(&self.v)?);
+        let err = match self.integration_error {
+            Some(e) => format!("{e:.3e}"),
+            None => "not checked".into(),
+        };
+        let status = match &self.warning {
+            Some(w) => format!(
+                "<b>WARNING:</b> {}",
+                w.replace('&', "&amp;")
+                    .replace('<', "&lt;")
+                    .replace('>', "&gt;")
+            ),
+            None => "ok".into(),
+        };
+        Ok(format!(
+            "<div><b>nlsdof Simulation</b> &mdash; {status}<table>\
+             <tr><th>quantity</th><th>value</th><th>unit</th></tr>\
+             <tr><td>samples</td><td>{}</td><td>-</td></tr>\
+             <tr><td>max |x|</td><td>{px:.6e}</td><td>m</td></tr>\
+             <tr><td>max |v|</td><td>{pv:.6e}</td><td>m/s</td></tr>\
+             <tr><td>integration error (relative to max |x|)</td><td>{err}</td><td>-</td></tr>\
+             </table></div>",
+            self.n
+        ))
+    }
+
     fn __repr__(&self) -> String {
         let n = self.n;
         let e = match self.integration_error {

@@ -20,6 +20,13 @@ use std::time::Instant;
 /// intervals, and the envelope error of the fitted model's free decay.
 /// `t_start` (s from the first sample) and `band` (Hz, Hz) default to what
 /// the record shows. Returns the document (dict).
+///
+/// >>> import numpy as np, nlsdof
+/// >>> t = np.arange(20000) / 1000.0; wn = 2 * np.pi * 20
+/// >>> x = np.exp(-0.01 * wn * t) * np.cos(wn * np.sqrt(1 - 1e-4) * t)  # f_n 20 Hz, zeta 0.01
+/// >>> r = nlsdof.decay(x, fs=1000.0)
+/// >>> r["adequate"], round(r["damping_fit"]["parameters"][0]["value"], 2)  # delta = 2 zeta omega_n, 1/s
+/// (True, 2.52)
 #[pyfunction]
 #[pyo3(signature = (x, fs, t_start=None, band=None, bins=30))]
 pub fn decay<'py>(
@@ -67,7 +74,20 @@ pub fn decay<'py>(
         "model_envelope",
         numpy::PyArray1::from_vec(py, r.model_amplitude.clone()),
     )?;
-    Ok(out)
+    // the model envelope's first samples are the Hilbert edge transient of
+    // its simulation (left out of the figures), and the fitted backbone and
+    // damping curves of the CLI's figure
+    d.set_item(
+        "model_envelope_edge",
+        nlsdof_report::decay::model_edge_samples(&r, fs),
+    )?;
+    let (ca, cf, cr) = nlsdof_report::decay::fitted_curves(&r);
+    let curves = pyo3::types::PyDict::new(py);
+    curves.set_item("amplitude", numpy::PyArray1::from_vec(py, ca))?;
+    curves.set_item("f_hz", numpy::PyArray1::from_vec(py, cf))?;
+    curves.set_item("decay_rate", numpy::PyArray1::from_vec(py, cr))?;
+    d.set_item("fitted_curves", curves)?;
+    crate::document::report(out, "decay")
 }
 
 /// Output-error fit of the power-law ODE (Eq 32) to the input `u`
@@ -80,8 +100,15 @@ pub fn decay<'py>(
 /// steps per sample (default: chosen so that the integration error is at
 /// most 1 % of the RMS output error; the document's "integration" says
 /// which). Returns the document (dict): parameters, intervals, RMS errors.
+///
+/// >>> import numpy as np, nlsdof
+/// >>> u = np.random.default_rng(0).standard_normal(1000)
+/// >>> y, _ = nlsdof.Model(1.0, (2 * np.pi * 5) ** 2, 2.0).simulate(u, fs=200.0)
+/// >>> r = nlsdof.fit_time(u, y, 200.0, model="linear")
+/// >>> r["converged"], round(r["parameters"]["alpha"], 1), round(r["parameters"]["delta"], 3)
+/// (True, 987.0, 2.0)
 #[pyfunction]
-#[pyo3(signature = (u, y, fs, model="duffing", fit_range=None, tests=None, starts=1, seed=1, max_iterations=400, input_interpolation="cubic", substeps=None))]
+#[pyo3(signature = (u, y, fs, model="duffing", fit_range=None, tests=None, starts=1, seed=1, max_iterations=400, input_interpolation="cubic", substeps=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit_time<'py>(
     py: Python<'py>,
@@ -96,6 +123,7 @@ pub fn fit_time<'py>(
     max_iterations: usize,
     input_interpolation: &str,
     substeps: Option<usize>,
+    progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let t0 = Instant::now();
     let interpolation = InputInterpolation::parse(input_interpolation).ok_or_else(|| {
@@ -146,17 +174,27 @@ pub fn fit_time<'py>(
     opts.lm.max_iterations = max_iterations;
     opts.lm.max_evaluations = 3 * max_iterations;
     let t_fit = Instant::now();
-    let (fit, preds) = py
-        .detach(|| {
-            let fit = fit_time_domain(&rec, range, kind, &opts)?;
-            let tm = fit.model();
-            let preds = tests
-                .iter()
-                .map(|t| predict_with(&rec, *t, &tm, &fit.discretisation))
-                .collect::<Result<Vec<Prediction>, _>>()?;
-            Ok::<_, nlsdof::identification::time_domain::TimeFitError>((fit, preds))
-        })
-        .map_err(value_error)?;
+    // Ctrl-C stops it (KeyboardInterrupt); progress= sees the fit, then
+    // each test range's prediction
+    let (fit, preds) = crate::interrupt::run(py, progress, kind.name(), |cancel, rep| {
+        opts.lm.cancel = cancel;
+        rep.stage("output-error fit", 1);
+        let fit = fit_time_domain(&rec, range, kind, &opts)?;
+        rep.step();
+        let tm = fit.model();
+        rep.stage("predictions", tests.len());
+        let preds = tests
+            .iter()
+            .map(|t| {
+                cancel.check()?;
+                let p = predict_with(&rec, *t, &tm, &fit.discretisation);
+                rep.step();
+                p
+            })
+            .collect::<Result<Vec<Prediction>, _>>()?;
+        Ok::<_, nlsdof::identification::time_domain::TimeFitError>((fit, preds))
+    })?
+    .map_err(value_error)?;
     let run = nlsdof_report::time_fit::TimeFitRun {
         input: "",
         kind,
@@ -187,5 +225,5 @@ pub fn fit_time<'py>(
             entry?.set_item("y_model", numpy::PyArray1::from_vec(py, p.y_model.clone()))?;
         }
     }
-    Ok(out)
+    crate::document::report(out, "fit_time")
 }

@@ -42,3 +42,33 @@ def test_inspect_refuses_bad_options_and_data():
         nlsdof.inspect(cols)
     with pytest.raises(ValueError, match="phase"):
         nlsdof.inspect(cols, phase="sometimes")
+
+
+def test_fit_from_inspect_matches_the_cli():
+    """`fit(..., from_inspect=True)` is `fit --from-inspect`: the same fit
+    (the CLI's JSON theta and objective, bit for bit) on the demo wing."""
+    import tempfile
+
+    import numpy as np
+
+    cli = os.environ.get("NLSDOF_CLI")
+    if not cli:
+        pytest.skip("NLSDOF_CLI is not set")
+    wing = nlsdof.Model.from_toml("examples/har-wing.toml")
+    f = np.linspace(5.3, 5.5, 120)
+    levels = [0.41, 0.81, 1.23]
+    a = np.concatenate([s.amplitude for s in wing.sweep(gamma=levels, f_hz=f)])
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "wing.csv")
+        with open(path, "w") as fh:
+            fh.write("level,gamma,f_hz,amplitude\n")
+            for i, g in enumerate(levels):
+                for k in range(len(f)):
+                    fh.write(f"L{i},{float(g)!r},{float(f[k])!r},{float(a[i * len(f) + k])!r}\n")
+        r = nlsdof.fit(path, from_inspect=True)
+        out = subprocess.run([cli, "fit", path, "--from-inspect", "--json"],
+                             capture_output=True, text=True, check=True).stdout
+    v = json.loads(out)
+    assert v["from_inspect"]["start_node"] is not None
+    assert r.to_dict()["theta"] == v["theta"]
+    assert r.to_dict()["objective"] == v["objective"]

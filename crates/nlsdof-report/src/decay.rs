@@ -4,7 +4,7 @@
 
 use crate::ReportError;
 use nlsdof::identification::decay::{DecayAnalysis, Fitted};
-use nlsdof_figure::{self as figure, colour, Panel, Series, Style, GREY};
+use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style, GREY};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 
@@ -193,28 +193,96 @@ fn fitted_json(f: &Fitted) -> Value {
 }
 
 /// SVG of the record `x` (sampled at `fs` Hz from `t0` s) with the
-/// analysis: the record with its Hilbert envelope and the fitted model's
-/// envelope; the backbone f(a) (points: Hilbert, line: fitted); the
-/// damping curve, decay rate −d ln a/dt against amplitude.
+/// analysis ([`decay_figure`] of a column named `x` in an unstated unit).
 pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<String, ReportError> {
+    let bytes = decay_figure(x, fs, t0, r, "x", None, figure::Format::Svg)?;
+    Ok(String::from_utf8(bytes).expect("SVG is text"))
+}
+
+/// The fitted model's curves of the figure's backbone and damping panels
+/// on 101 amplitudes from 0 to 1.05 times the largest binned amplitude:
+/// `(amplitude, f_hz, decay_rate)` with ω² = α + g(ρ) β a^ρ (Hz) and
+/// λ = (δ + g(η) κ (ω a)^η) / 2 (1/s; non-finite at a = 0 for η < 0).
+pub fn fitted_curves(r: &DecayAnalysis) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let amax = r.backbone.iter().fold(0.0f64, |m, p| m.max(p.amplitude)) * 1.05;
+    let m = r.model();
+    let g = nlsdof::power_law::g_unchecked;
+    let dm = r.damping.values;
+    let a: Vec<f64> = (0..=100).map(|i| amax * i as f64 / 100.0).collect();
+    let f: Vec<f64> = a
+        .iter()
+        .map(|&a| {
+            let w2 = m.alpha + g(m.rho) * m.beta * a.powf(m.rho);
+            w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+        })
+        .collect();
+    let rate = a
+        .iter()
+        .zip(&f)
+        .map(|(&a, &f)| {
+            let w = 2.0 * std::f64::consts::PI * f;
+            0.5 * (dm[0] + g(dm[2]) * dm[1] * (w * a).powf(dm[2]))
+        })
+        .collect();
+    (a, f, rate)
+}
+
+/// Samples at the start of the fitted model's envelope left out of the
+/// figure: the Hilbert transform's edge transient of the simulated decay
+/// (the band-pass trim of the analysis, `max(3 cycles, 2/bandwidth)`, at
+/// most a quarter of the decay; the envelope error skips them too).
+pub fn model_edge_samples(r: &DecayAnalysis, fs: f64) -> usize {
+    let (b0, b1) = r.band;
+    let fc = 0.5 * (b0 + b1);
+    let trim = ((3.0 / fc).max(2.0 / (b1 - b0)) * fs).ceil();
+    let trim = if trim.is_finite() && trim > 0.0 {
+        trim as usize
+    } else {
+        0
+    };
+    trim.min(r.model_amplitude.len() / 4)
+}
+
+/// The figure of `decay --plot` (SVG or PNG): the record `x` (sampled at
+/// `fs` Hz from `t0` s; column `column`, in `unit` when known) with its
+/// Hilbert envelope and the fitted model's envelope (from the end of the
+/// Hilbert edge transient, [`model_edge_samples`]); the backbone f(a)
+/// (points: Hilbert, line: fitted); the damping curve, decay rate
+/// −d ln a/dt against amplitude. Every amplitude axis names the column and
+/// its unit.
+pub fn decay_figure(
+    x: &[f64],
+    fs: f64,
+    t0: f64,
+    r: &DecayAnalysis,
+    column: &str,
+    unit: Option<&str>,
+    format: figure::Format,
+) -> Result<Vec<u8>, ReportError> {
     let (blue, red) = (colour(0), colour(1));
+    let unit = unit
+        .filter(|u| !u.trim().is_empty())
+        .unwrap_or("unit as recorded");
     let t = |k: usize| t0 + k as f64 / fs;
     let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
-    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
     let mut record = Panel::new(
-        "record (grey), Hilbert envelope (blue), fitted model's envelope (red)",
-        "t [s]",
-        "response",
+        "record, Hilbert envelope and the fitted model's envelope",
+        "time t [s]",
+        &format!("{column} [{unit}], mean removed"),
     );
-    record.x_range = Some((t(0), t(x.len() - 1)));
+    record.legend = Corner::Outside;
+    record.x_range = Some((t(0), t(x.len().saturating_sub(1))));
     record.y_range = Some((-1.1 * xmax, 1.1 * xmax));
     let step = (x.len() / 20_000).max(1);
-    let envelope = |a: &[f64]| -> Vec<(f64, f64)> {
+    let envelope = |a: &[f64], from: usize| -> Vec<(f64, f64)> {
         a.iter()
             .enumerate()
+            .skip(from)
             .map(|(k, &a)| (t(r.start + k), a))
             .collect()
     };
+    let edge = model_edge_samples(r, fs);
     record.series = vec![
         Series::new(
             (0..x.len())
@@ -225,8 +293,9 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
             Style::Line(1),
         )
         .label("record"),
-        Series::new(envelope(&r.amplitude), blue, Style::Line(2)).label("Hilbert envelope"),
-        Series::new(envelope(&r.model_amplitude), red, Style::Line(2)).label("fitted model"),
+        Series::new(envelope(&r.amplitude, 0), blue, Style::Line(2)).label("Hilbert envelope"),
+        Series::new(envelope(&r.model_amplitude, edge), red, Style::Line(2))
+            .label("fitted model's envelope"),
     ];
     let amax = r.backbone.iter().fold(0.0f64, |m, p| m.max(p.amplitude)) * 1.05;
     let (f0, f1) = r
@@ -243,11 +312,9 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
         let w2 = m.alpha + g(m.rho) * m.beta * a.powf(m.rho);
         w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
     };
-    let mut backbone = Panel::new(
-        "backbone: points (Hilbert), line (fitted)",
-        "f [Hz]",
-        "amplitude",
-    );
+    let amp_label = format!("amplitude of {column} [{unit}]");
+    let mut backbone = Panel::new("backbone f(a)", "frequency f [Hz]", &amp_label);
+    backbone.legend = Corner::Outside;
     backbone.x_range = Some((f0 - pad, f1 + pad));
     backbone.y_range = Some((0.0, amax));
     backbone.series = vec![
@@ -255,7 +322,8 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
             r.backbone.iter().map(|p| (p.f_hz, p.amplitude)).collect(),
             blue,
             Style::Filled(3),
-        ),
+        )
+        .label("Hilbert, per bin"),
         Series::new(
             (0..=100)
                 .map(|i| {
@@ -265,7 +333,8 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
                 .collect(),
             red,
             Style::Line(2),
-        ),
+        )
+        .label("fitted"),
     ];
     let lmax = r.backbone.iter().fold(0.0f64, |mx, p| mx.max(p.decay_rate)) * 1.2;
     let lmin = r
@@ -280,10 +349,11 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
         0.5 * (dm[0] + g(dm[2]) * dm[1] * (w * a).powf(dm[2]))
     };
     let mut damping = Panel::new(
-        "damping curve: decay rate -d ln a/dt",
-        "amplitude",
-        "lambda [1/s]",
+        "damping curve",
+        &amp_label,
+        "decay rate λ = -d ln a/dt [1/s]",
     );
+    damping.legend = Corner::Outside;
     damping.x_range = Some((0.0, amax));
     damping.y_range = Some((lmin, lmax.max(1e-12)));
     damping.series = vec![
@@ -294,7 +364,8 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
                 .collect(),
             blue,
             Style::Filled(3),
-        ),
+        )
+        .label("Hilbert, per bin"),
         Series::new(
             (1..=100)
                 .map(|i| {
@@ -304,10 +375,12 @@ pub fn decay_svg(x: &[f64], fs: f64, t0: f64, r: &DecayAnalysis) -> Result<Strin
                 .collect(),
             red,
             Style::Line(2),
-        ),
+        )
+        .label("fitted"),
     ];
-    Ok(figure::render(
-        "Free decay",
+    Ok(figure::render_as(
+        format,
+        &format!("Free decay of {column}"),
         &[record, backbone, damping],
         1,
         1200,

@@ -89,6 +89,30 @@ pub fn check_figure(
     path.map(|p| figure_format(flag, p, supported)).transpose()
 }
 
+/// The formats of every line figure's `--plot`: SVG (the default, for a
+/// name without an extension) or PNG, from the file name.
+pub const PLOT_FORMATS: [FigureFormat; 2] = [FigureFormat::Svg, FigureFormat::Png];
+
+/// The format of a `--plot FILE` line figure ([`PLOT_FORMATS`]), checked
+/// before any work; None without the option.
+pub fn check_plot_name(path: Option<&Path>) -> Result<Option<nlsdof_figure::Format>, ReportError> {
+    Ok(
+        check_figure("--plot", path, &PLOT_FORMATS)?.map(|f| match f {
+            FigureFormat::Png => nlsdof_figure::Format::Png,
+            _ => nlsdof_figure::Format::Svg,
+        }),
+    )
+}
+
+/// The format `path` asks for among SVG and PNG (for a figure rendered
+/// after [`check_plot_name`] accepted the name): PNG for `.png`, else SVG.
+pub fn plot_format(path: &Path) -> nlsdof_figure::Format {
+    match check_figure("--plot", Some(path), &PLOT_FORMATS) {
+        Ok(Some(FigureFormat::Png)) => nlsdof_figure::Format::Png,
+        _ => nlsdof_figure::Format::Svg,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

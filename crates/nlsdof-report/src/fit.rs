@@ -14,7 +14,7 @@ use nlsdof::identification::{
 };
 use nlsdof::identification::{Parameter, Parameters};
 use nlsdof::{Model, SweepDirection};
-use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style};
+use nlsdof_figure::{self as figure, colour, Corner, Panel, Series};
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -31,50 +31,94 @@ fn status_name(s: Status) -> &'static str {
     }
 }
 
-/// SVG of a sweep fit: measured amplitudes (dots, every point up to 300
-/// per curve) and the model's branch-following amplitudes at the same steps
-/// (one line per curve), one colour per curve, zero-to-peak in m against Hz.
+/// SVG of a sweep fit ([`fit_figure`] in SVG).
 pub fn fit_svg(data: &Dataset, res: &FitResult) -> Result<String, ReportError> {
-    let mut panel = Panel::new(
-        format!(
-            "nlsdof fit: {} (dots: data, lines: model), cost {:.4e}",
-            res.kind, res.cost
-        ),
-        "frequency [Hz]",
-        "amplitude [m]",
-    );
-    panel.legend = Corner::Outside;
+    let bytes = fit_figure(data, res, figure::Format::Svg)?;
+    Ok(String::from_utf8(bytes).expect("SVG is text"))
+}
+
+/// The figure of a sweep fit (`fit --plot`, SVG or PNG): measured
+/// amplitudes (markers, every point up to 300 per curve) and the model's
+/// branch-following amplitudes at the same steps (one line per curve), one
+/// colour per level ([`figure::colour`], 20 distinct), up-sweeps solid with
+/// filled dots and down-sweeps dashed with hollow circles
+/// ([`figure::sweep_styles`]); zero-to-peak amplitude in one length unit
+/// chosen from the data ([`figure::length_unit`]) against Hz.
+pub fn fit_figure(
+    data: &Dataset,
+    res: &FitResult,
+    format: figure::Format,
+) -> Result<Vec<u8>, ReportError> {
     let top = data
         .curves
         .iter()
         .flat_map(|c| c.amplitudes.iter())
         .chain(&res.model_amplitudes)
         .fold(0.0f64, |m, &a| if a.is_finite() { m.max(a) } else { m });
+    let (unit, scale) = figure::length_unit(top);
+    let mut panel = Panel::new(
+        format!(
+            "nlsdof fit: {} (markers: data, lines: model), cost {:.4e}",
+            res.kind, res.cost
+        ),
+        "frequency f [Hz]",
+        &format!("amplitude a [{unit}], zero-to-peak"),
+    );
+    panel.legend = Corner::Outside;
     if top > 0.0 {
-        panel.y_range = Some((0.0, 1.05 * top));
+        panel.y_range = Some((0.0, 1.05 * top * scale));
     }
+    // one colour per level, in the order the levels first appear
+    let mut levels: Vec<&str> = Vec::new();
+    let (mut any_up, mut any_down) = (false, false);
     let mut off = 0;
-    for (i, c) in data.curves.iter().enumerate() {
+    for c in &data.curves {
+        let i = match levels.iter().position(|l| *l == c.level.as_str()) {
+            Some(i) => i,
+            None => {
+                levels.push(c.level.as_str());
+                levels.len() - 1
+            }
+        };
         let n = c.omegas.len();
         let f: Vec<f64> = c.omegas.iter().map(|&w| hz(w)).collect();
-        let model = (0..n).map(|k| (f[k], res.model_amplitudes[off + k]));
+        let model = (0..n).map(|k| (f[k], res.model_amplitudes[off + k] * scale));
         let stride = (n / 300).max(1);
-        let measured = (0..n).step_by(stride).map(|k| (f[k], c.amplitudes[k]));
-        let dir = if c.direction == SweepDirection::Up {
-            "up"
-        } else {
-            "down"
-        };
+        let measured = (0..n)
+            .step_by(stride)
+            .map(|k| (f[k], c.amplitudes[k] * scale));
+        let up = c.direction == SweepDirection::Up;
+        any_up |= up;
+        any_down |= !up;
+        let (line, marker) = figure::sweep_styles(up, 2, 2);
+        let dir = if up { "up" } else { "down" };
         panel.series.push(
-            Series::new(model.collect(), colour(i), Style::Line(2))
-                .label(format!("{} ({dir})", c.level)),
+            Series::new(model.collect(), colour(i), line).label(format!("{} {dir}", c.level)),
         );
         panel
             .series
-            .push(Series::new(measured.collect(), colour(i), Style::Filled(2)));
+            .push(Series::new(measured.collect(), colour(i), marker));
         off += n;
     }
-    Ok(figure::render("Stepped-sine fit", &[panel], 1, 1100, 600)?)
+    for (present, up, dir) in [(any_up, true, "up"), (any_down, false, "down")] {
+        if present {
+            let (line, marker) = figure::sweep_styles(up, 2, 2);
+            panel
+                .series
+                .push(Series::new(vec![], figure::DARK, line).label(format!("model, sweep {dir}")));
+            panel.series.push(
+                Series::new(vec![], figure::DARK, marker).label(format!("data, sweep {dir}")),
+            );
+        }
+    }
+    Ok(figure::render_as(
+        format,
+        "Stepped-sine fit",
+        &[panel],
+        1,
+        1100,
+        600,
+    )?)
 }
 
 /// The JSON document of a staged fit ([`nlsdof::identification::identify()`]):
@@ -165,6 +209,19 @@ pub fn identification_report(
     id: &Identification,
     mass: Option<f64>,
 ) -> Result<String, ReportError> {
+    identification_report_with(id, mass, &[], crate::intervals::IntervalView::One)
+}
+
+/// [`identification_report`] with the output-error `profiles` computed
+/// (`fit --profile`) and the intervals of `view` ([`crate::intervals`]):
+/// one 95 % interval per parameter in the table, labelled with its method,
+/// or also every other interval with what it leaves out.
+pub fn identification_report_with(
+    id: &Identification,
+    mass: Option<f64>,
+    profiles: &[OutputErrorProfile],
+    view: crate::intervals::IntervalView,
+) -> Result<String, ReportError> {
     let mut s = String::new();
     if let Some(w) = id.warning() {
         writeln!(s, "{w}").ok();
@@ -180,7 +237,12 @@ pub fn identification_report(
         };
         s.push_str(&sign_trials_text(&id.sign_trials, chosen));
     }
-    result_text_body(&mut s, &id.data, &id.fit, mass)?;
+    let chosen = crate::intervals::chosen(&id.fit, profiles);
+    result_text_body(&mut s, &id.data, &id.fit, mass, Some(&chosen))?;
+    s.push_str(&crate::intervals::default_text(id, profiles));
+    if view == crate::intervals::IntervalView::All {
+        s.push_str(&crate::intervals::all_text(id, profiles));
+    }
     s.push_str(&curves_text(id));
     s.push_str(&pq_text(&id.data, &id.fit)?);
     minima_text(&mut s, &id.fit.minima, &id.fit.status);
@@ -286,6 +348,7 @@ pub fn profiles_json(profiles: &[OutputErrorProfile]) -> Value {
         m.insert(
             p.parameter.info().name.to_string(),
             json!({"estimate": p.estimate, "ci95": [p.lower, p.upper], "fits": p.fits,
+                   "start": p.start, "refused": p.refusal(),
                    "points": p.points.iter().map(|&(v, s)| [v, s]).collect::<Vec<_>>(),
                    "note": "(P - P*)/sigma^2 <= 3.84, P the output-error objective with the exponent held; null = open (bound or step limit)"}),
         );
@@ -383,35 +446,50 @@ pub fn identification_text(id: &Identification) -> String {
     if let Some(g) = id.gain_test {
         let t = nlsdof::identification::identify::GAIN_F_THRESHOLD;
         match g.output_error {
+            // the decision first, then its reason (issue 28: "held at 1
+            // (..., F = 1.392e4, freed when F > 10.83)" read as a
+            // contradiction when the estimate was outside the bounds)
             Some(o) => writeln!(
                 s,
-                "gain: {} (output error: free gain {:.4}, F = {:.3e}, freed when F > {t}{}; equation-error screen {:.4}, F = {:.3e})",
-                if g.freed { "free" } else { "held at 1" },
+                "gain: {} (output error: free gain {:.4}, F = {:.3e} {} {t}{}; equation-error screen {:.4}, F = {:.3e})",
+                if g.freed {
+                    "free: freeing it lowers the output error significantly"
+                } else {
+                    "held at 1: freeing it does not lower the output error significantly"
+                },
                 o.gain,
                 o.f_statistic,
+                if o.f_statistic > t { ">" } else { "<=" },
                 if o.at_bound { "; the free gain sits at its bound" } else { "" },
                 g.gain,
                 g.f_statistic,
             ),
             None => {
                 let (lo, hi) = id.spec.bounds[nlsdof::identification::models::GAIN];
-                // held although F passes: the estimate lies outside the
-                // gain's bounds (say so, not only the F test)
-                let why = if !g.freed && g.f_statistic > t && !(g.gain > lo && g.gain < hi) {
-                    format!(
-                        "; held because the estimate lies outside the gain's bounds [{lo}, {hi}]: \
-                         check the units of the levels and amplitudes"
+                let outside = !(g.gain > lo && g.gain < hi);
+                if !g.freed && g.f_statistic > t && outside {
+                    // significant, but the estimate lies outside the
+                    // bounds: that is why it is held, and a unit mistake
+                    // is the likely cause
+                    writeln!(
+                        s,
+                        "gain: held at 1 because the equation-error estimate {:.4} lies outside the gain's bounds [{lo}, {hi}] (F = {:.3e} > {t} would free it otherwise): check the units of the levels (g instead of m/s^2? --gamma-in-g) and amplitudes (mm instead of m?)",
+                        g.gain, g.f_statistic,
                     )
                 } else {
-                    String::new()
-                };
-                writeln!(
-                    s,
-                    "gain: {} (equation-error gain {:.4}, F = {:.3e}, freed when F > {t}{why})",
-                    if g.freed { "free" } else { "held at 1" },
-                    g.gain,
-                    g.f_statistic,
-                )
+                    writeln!(
+                        s,
+                        "gain: {} (equation-error gain {:.4}, F = {:.3e} {} {t})",
+                        if g.freed {
+                            "free: freeing it lowers the equation error significantly"
+                        } else {
+                            "held at 1: freeing it does not lower the equation error significantly"
+                        },
+                        g.gain,
+                        g.f_statistic,
+                        if g.f_statistic > t { ">" } else { "<=" },
+                    )
+                }
             }
         }
         .ok();
@@ -425,21 +503,8 @@ pub fn identification_text(id: &Identification) -> String {
         id.data.curves.len()
     )
     .ok();
-    let f = |p: Option<nlsdof::identification::landscape::ProfileInterval>| {
-        p.map(|p| {
-            format!(
-                "[{}, {}]",
-                p.lower.map_or("open".into(), |v| format!("{v:.3}")),
-                p.upper.map_or("open".into(), |v| format!("{v:.3}"))
-            )
-        })
-    };
-    if let Some(r) = f(id.rho_profile) {
-        writeln!(s, "profile 95 % interval (equation error) rho: {r}").ok();
-    }
-    if let Some(e) = f(id.eta_profile) {
-        writeln!(s, "profile 95 % interval (equation error) eta: {e}").ok();
-    }
+    // (the equation-error profile intervals are in the `--intervals all`
+    // section, crate::intervals, with what they leave out)
     s
 }
 
@@ -756,6 +821,20 @@ pub fn parameter_table_text(
     unc: Option<&Uncertainty>,
     mass: Option<f64>,
 ) {
+    parameter_rows(s, theta, status, unc, mass, None)
+}
+
+/// [`parameter_table_text`]; with `chosen`, the interval column holds the
+/// one interval reported per parameter and names its method
+/// ([`crate::intervals::chosen`]).
+fn parameter_rows(
+    s: &mut String,
+    theta: &Parameters,
+    status: &[Status; N_PARAMS],
+    unc: Option<&Uncertainty>,
+    mass: Option<f64>,
+    chosen: Option<&[Option<crate::intervals::Interval>; N_PARAMS]>,
+) {
     let m = mass.unwrap_or(1.0);
     if mass.is_none() {
         writeln!(
@@ -764,10 +843,14 @@ pub fn parameter_table_text(
         )
         .ok();
     }
+    let (head, width) = match chosen {
+        None => ("95 % interval", 33),
+        Some(_) => ("95 % interval (method)", 54),
+    };
     writeln!(
         s,
-        "{:<6} {:>7} {:>15} {:>12} {:>33}   {}",
-        "param", "status", "value", "std error", "95 % interval", "physical"
+        "{:<6} {:>7} {:>15} {:>12} {:>width$}   {}",
+        "param", "status", "value", "std error", head, "physical"
     )
     .ok();
     for j in 0..N_PARAMS {
@@ -775,13 +858,16 @@ pub fn parameter_table_text(
             continue;
         }
         let u_k = unc.and_then(|u| u.index(PARAM_NAMES[j]).map(|k| (u, k)));
-        let (se, ci) = match u_k {
+        let (se, mut ci) = match u_k {
             Some((u, k)) => (
                 format!("{:.4e}", u.std_errors[k]),
                 format!("[{:.6e}, {:.6e}]", u.lower[k], u.upper[k]),
             ),
             None => ("-".into(), "-".into()),
         };
+        if let Some(c) = chosen {
+            ci = c[j].map_or("-".into(), |i| format!("{} {}", i.bounds_text(), i.method));
+        }
         let phys = if Parameter::ALL[j].mass_scaled() {
             theta[j] * m
         } else {
@@ -789,7 +875,7 @@ pub fn parameter_table_text(
         };
         writeln!(
             s,
-            "{:<6} {:>7} {:>15.8e} {:>12} {:>33}   {} = {:.8e} {}",
+            "{:<6} {:>7} {:>15.8e} {:>12} {:>width$}   {} = {:.8e} {}",
             PARAM_NAMES[j],
             status_name(status[j]),
             theta[j],
@@ -824,7 +910,7 @@ pub fn result_text(
     for n in res.notes() {
         writeln!(s, "note: {n}").ok();
     }
-    result_text_body(&mut s, data, res, mass)?;
+    result_text_body(&mut s, data, res, mass, None)?;
     let jumps = predicted_jumps(data, &res.theta)?;
     writeln!(
         s,
@@ -861,6 +947,7 @@ fn result_text_body(
     data: &Dataset,
     res: &FitResult,
     mass: Option<f64>,
+    chosen: Option<&[Option<crate::intervals::Interval>; N_PARAMS]>,
 ) -> Result<(), ReportError> {
     let _ = data;
     if res.objective != res.cost {
@@ -874,12 +961,13 @@ fn result_text_body(
         res.termination, res.iterations
     )
     .ok();
-    parameter_table_text(
+    parameter_rows(
         s,
         &res.theta,
         &res.status,
         res.uncertainty.as_ref().filter(|_| res.intervals_valid()),
         mass,
+        chosen,
     );
     if res.uncertainty.is_some() && !res.intervals_valid() {
         writeln!(

@@ -110,15 +110,10 @@ fn backbone_runs(p: &FrfPlot, a_max: f64) -> Vec<Vec<(f64, f64)>> {
     runs
 }
 
-/// Display unit for amplitudes up to `max_m` metres.
+/// Display unit for amplitudes up to `max_m` metres: the one length unit
+/// of every figure ([`figure::length_unit`]).
 fn amplitude_unit(max_m: f64) -> (&'static str, f64) {
-    if max_m >= 0.5 {
-        ("m", 1.0)
-    } else if max_m >= 0.5e-3 {
-        ("mm", 1e3)
-    } else {
-        ("µm", 1e6)
-    }
+    figure::length_unit(max_m)
 }
 
 /// Tick label of value `v` on an axis spanning `span`.
@@ -131,6 +126,18 @@ fn tick_label(v: f64, span: f64) -> String {
 /// Renders the SVG document (in memory; the caller writes it atomically).
 pub fn render_frf(p: &FrfPlot) -> Result<String, ReportError> {
     Ok(figure::render(
+        &p.title,
+        &[frf_panel(p)?],
+        1,
+        WIDTH,
+        HEIGHT,
+    )?)
+}
+
+/// The same figure as SVG or PNG bytes.
+pub fn render_frf_as(p: &FrfPlot, format: figure::Format) -> Result<Vec<u8>, ReportError> {
+    Ok(figure::render_as(
+        format,
         &p.title,
         &[frf_panel(p)?],
         1,

@@ -7,6 +7,7 @@ use crate::figure_file::FigureFormat;
 use crate::ReportError;
 use nlsdof::identification::inspect::{Inspection, JumpKind, LawFit, PeakKind, ResonanceSource};
 use nlsdof::identification::Dataset;
+use nlsdof::SweepDirection;
 use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style, GREY};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -317,9 +318,10 @@ pub fn inspect_figure(
             .step_by(stride)
             .map(|i| (c.omegas[i] / TWO_PI, c.amplitudes[i] / c.gamma))
             .collect();
+        let (line, _) = nlsdof_figure::sweep_styles(c.direction == SweepDirection::Up, 1, 2);
         curves
             .series
-            .push(Series::new(pts, colour(k), Style::Line(1)).label(format!(
+            .push(Series::new(pts, colour(k), line).label(format!(
                 "{} ({})",
                 c.level,
                 c.direction.name()
@@ -338,16 +340,18 @@ pub fn inspect_figure(
     }
     // backbone
     let amax = r.levels.iter().fold(0.0f64, |m, p| m.max(p.amplitude)) * 1.1;
+    // one length unit from the data's magnitude, as every figure
+    let (unit, scale) = nlsdof_figure::length_unit(amax / 1.1);
     let mut backbone = Panel::new(
         "backbone: resonance points (dots; hollow: left out), power-law fit (line)",
         "frequency [Hz]",
-        "amplitude a_r [m]",
+        &format!("amplitude a_r [{unit}]"),
     );
     backbone.legend = Corner::Outside;
     let mut pts_used = Vec::new();
     let mut pts_out = Vec::new();
     for p in &r.levels {
-        let q = (p.omega_backbone / TWO_PI, p.amplitude);
+        let q = (p.omega_backbone / TWO_PI, p.amplitude * scale);
         if p.used {
             pts_used.push(q);
         } else {
@@ -370,7 +374,7 @@ pub fn inspect_figure(
             .filter_map(|i| {
                 let a = amax * i as f64 / 120.0;
                 let w2 = f.at(a.max(1e-300));
-                (w2 > 0.0 && w2.is_finite()).then(|| (w2.sqrt() / TWO_PI, a))
+                (w2 > 0.0 && w2.is_finite()).then(|| (w2.sqrt() / TWO_PI, a * scale))
             })
             .collect();
         backbone.series.push(
@@ -378,7 +382,7 @@ pub fn inspect_figure(
         );
     }
     if amax > 0.0 {
-        backbone.y_range = Some((0.0, amax));
+        backbone.y_range = Some((0.0, amax * scale));
     }
     // damping
     let vmax = r.levels.iter().fold(0.0f64, |m, p| m.max(p.velocity)) * 1.1;

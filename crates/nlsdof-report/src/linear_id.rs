@@ -3,11 +3,12 @@
 //! linear part and the SVG of |H|, phase and the Nyquist plot.
 
 use crate::ReportError;
+use nlsdof::vector_fitting::InputKind;
 use nlsdof::vector_fitting::{
     mobility, CircleFit, MassSource, OutputKind, SdofIdentification, SdofLinear, C64,
 };
 use nlsdof::Model;
-use nlsdof_figure::{self as figure, colour, Panel, Series, Style};
+use nlsdof_figure::{self as figure, colour, Corner, Panel, Series, Style};
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -278,13 +279,56 @@ fn circle_result(id: &SdofIdentification) -> Result<&CircleFit, String> {
     }
 }
 
+/// The unit of an FRF from `input` to `output` (SI, as the values are
+/// used): `m/N`, `(m/s)/N`, `m/(m/s²)`, ...
+pub fn frf_unit(input: InputKind, output: OutputKind) -> String {
+    let out = match output {
+        OutputKind::Displacement => "m",
+        OutputKind::Velocity => "(m/s)",
+        OutputKind::Acceleration => "(m/s²)",
+    };
+    let inp = match input {
+        InputKind::Force => "N",
+        InputKind::Acceleration => "(m/s²)",
+    };
+    format!("{out}/{inp}")
+}
+
 /// SVG: |H| (log) and phase vs frequency, measured points and fitted curve;
-/// Nyquist plot of the mobility with the fitted model and the circle fit.
+/// Nyquist plot of the mobility with the fitted model and the circle fit
+/// (units of a displacement-per-base-acceleration FRF unless
+/// [`figure_as`] is told the quantities).
 pub fn svg(
     id: &SdofIdentification,
     f_hz: &[f64],
     output: OutputKind,
 ) -> Result<String, ReportError> {
+    let bytes = figure_as(
+        id,
+        f_hz,
+        InputKind::Acceleration,
+        output,
+        figure::Format::Svg,
+    )?;
+    Ok(String::from_utf8(bytes).expect("SVG is text"))
+}
+
+/// The figure of `linear-id --plot` (SVG or PNG): |H| (log, in the FRF's
+/// unit from `input` to `output`) and phase vs frequency, measured points
+/// and fitted curve; Nyquist plot of the mobility (velocity per input)
+/// with the fitted model and the circle fit.
+pub fn figure_as(
+    id: &SdofIdentification,
+    f_hz: &[f64],
+    input: InputKind,
+    output: OutputKind,
+    format: figure::Format,
+) -> Result<Vec<u8>, ReportError> {
+    let unit = frf_unit(input, output);
+    let mob_unit = frf_unit(input, OutputKind::Velocity);
+    if f_hz.is_empty() {
+        return Err(ReportError::Invalid("no FRF point to plot".into()));
+    }
     let (blue, red, green) = (colour(0), colour(1), colour(2));
     let (f0, f1) = (f_hz[0], f_hz[f_hz.len() - 1]);
     let (f0, f1) = if f1 > f0 {
@@ -312,9 +356,10 @@ pub fn svg(
     };
     let mut mag = Panel::new(
         "Measured (points) and fitted (line) FRF",
-        "Frequency [Hz]",
-        "|H|",
+        "frequency f [Hz]",
+        &format!("|H| [{unit}]"),
     );
+    mag.legend = Corner::Outside;
     mag.log_y = true;
     mag.x_range = Some((f0, f1));
     mag.y_range = Some((lo, hi));
@@ -329,7 +374,7 @@ pub fn svg(
         )
         .label("measured"),
     );
-    let mut phase = Panel::new("Phase", "Frequency [Hz]", "Phase [deg]");
+    let mut phase = Panel::new("Phase", "frequency f [Hz]", "phase of H [deg]");
     phase.x_range = Some((f0, f1));
     phase.y_range = Some((-180.0, 180.0));
     if let Some(h) = &id.values {
@@ -387,7 +432,12 @@ pub fn svg(
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
     let ext = if ext > 0.0 { ext * 1.1 } else { 1.0 };
-    let mut nyquist = Panel::new("Nyquist (mobility): data, fit, circle", "Re", "Im");
+    let mut nyquist = Panel::new(
+        "Nyquist plot of the mobility",
+        &format!("Re Y [{mob_unit}]"),
+        &format!("Im Y [{mob_unit}]"),
+    );
+    nyquist.legend = Corner::Outside;
     nyquist.x_range = Some((-ext, ext));
     nyquist.y_range = Some((-ext, ext));
     let pts = |v: &[C64]| v.iter().map(|z| (z.re, z.im)).collect::<Vec<_>>();
@@ -404,11 +454,12 @@ pub fn svg(
             .series
             .push(Series::new(pts(&circle), green, Style::Line(1)).label("circle fit"));
     }
-    Ok(figure::render(
+    Ok(figure::render_as(
+        format,
         "Linear identification",
         &[mag, phase, nyquist],
-        3,
-        400,
-        600,
+        2,
+        620,
+        460,
     )?)
 }

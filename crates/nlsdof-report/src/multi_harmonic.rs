@@ -255,6 +255,18 @@ pub fn sweep_svg(
     f_min: f64,
     f_max: f64,
 ) -> Result<String, ReportError> {
+    let bytes = sweep_figure(title, levels, f_min, f_max, figure::Format::Svg)?;
+    Ok(String::from_utf8(bytes).expect("SVG is text"))
+}
+
+/// [`sweep_svg`]'s figure as SVG or PNG bytes.
+pub fn sweep_figure(
+    title: &str,
+    levels: &[LevelSweep],
+    f_min: f64,
+    f_max: f64,
+    format: figure::Format,
+) -> Result<Vec<u8>, ReportError> {
     let mut a_max: f64 = 0.0;
     for l in levels {
         for p in &l.sweep.branch {
@@ -267,11 +279,7 @@ pub fn sweep_svg(
     if !(a_max > 0.0 && a_max.is_finite()) {
         a_max = 1e-3;
     }
-    let (unit, scale) = if a_max < 1e-3 {
-        ("µm", 1e6)
-    } else {
-        ("mm", 1e3)
-    };
+    let (unit, scale) = figure::length_unit(a_max);
     let mut amp = Panel::new(
         "First harmonic",
         "Frequency f [Hz]",
@@ -362,5 +370,12 @@ pub fn sweep_svg(
     }
     content.x_range = Some((f_min, f_max));
     content.y_range = Some((10f64.powf(lo.floor().max(-12.0)), 10f64.powf(0.5)));
-    Ok(figure::render(title, &[amp, content], 1, 1100, 430)?)
+    Ok(figure::render_as(
+        format,
+        title,
+        &[amp, content],
+        1,
+        1100,
+        430,
+    )?)
 }

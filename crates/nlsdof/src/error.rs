@@ -86,4 +86,7 @@ pub enum SimulationError {
     StepSizeUnderflow { t: f64, h: f64 },
     #[error("more than {limit} stick/slip events inside one step at t = {t} s (chattering)")]
     EventOverflow { t: f64, limit: usize },
+    /// Cancelled through its [`crate::cancel::Cancel`] flag: no result.
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }

@@ -225,6 +225,7 @@
 //! # Ok::<(), nlsdof::signal_processing::ComparisonError>(())
 //! ```
 
+pub mod cancel;
 pub mod demo;
 pub mod error;
 pub mod excitation;
@@ -236,6 +237,7 @@ pub mod model;
 pub mod multi_harmonic;
 pub mod power_law;
 pub mod power_sum;
+pub mod signal_generator;
 pub mod signal_processing;
 pub mod simulation;
 pub mod special;

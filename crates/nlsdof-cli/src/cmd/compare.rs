@@ -4,7 +4,7 @@
 
 use super::fit::{parse_model_kind, DataArgs};
 use crate::error::CliError;
-use nlsdof::identification::{FitSpec, Identification, Status, N_PARAMS, PARAM_NAMES};
+use nlsdof::identification::{Identification, Status, N_PARAMS, PARAM_NAMES};
 use nlsdof_report::fit::pq_text;
 use serde_json::json;
 use std::fmt::Write as _;
@@ -42,7 +42,8 @@ pub struct Args {
 pub fn run(args: Args) -> Result<(), CliError> {
     // (`compare --phase-resonance` is dispatched to `phase_resonance::run_compare_args`)
     use super::sign::SignArg;
-    use nlsdof::identification::{FitPlan, GainChoice, SignChoice};
+    use nlsdof::identification::compare::{compare_plans, CompareError, CompareOptions};
+    use nlsdof::identification::SignChoice;
     let sign = args.pr.sign.resolve(args.pr.softening)?;
     let data = args.data.load()?;
     let kinds = args
@@ -61,35 +62,34 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     let mass = super::fit::resolve_mass(args.mass, None, None)?;
-    // every model through the one pipeline (identify), as `fit`
-    let mut results: Vec<Identification> = Vec::new();
-    for kind in kinds {
-        let mut plan = FitPlan::new(kind);
-        plan.starts = starts;
-        plan.seed = args.seed;
-        plan.sign = match sign {
+    // every model through the one pipeline (identify), as `fit`; the plans
+    // are the library's, shared with Python's `compare`
+    let opts = CompareOptions {
+        free: args
+            .free
+            .as_deref()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .unwrap_or_default(),
+        starts,
+        seed: args.seed,
+        sign: match sign {
             SignArg::Data => SignChoice::Auto,
             SignArg::Auto => SignChoice::Both,
             SignArg::Hardening => SignChoice::Hardening,
             SignArg::Softening => SignChoice::Softening,
-        };
-        if let Some(list) = &args.free {
-            for name in list.split(',').filter(|s| !s.trim().is_empty()) {
-                let n = name.trim().to_ascii_lowercase();
-                if n == "gain" {
-                    plan.gain = GainChoice::Free;
-                    continue;
-                }
-                // a parameter a model does not have is simply not freed for it
-                let mut probe = FitSpec::new(kind, &data);
-                match probe.free(&n) {
-                    Ok(()) => plan.free.push(n),
-                    Err(nlsdof::identification::SpecError::NotInModel { .. }) => {}
-                    Err(e) => return Err(CliError::Usage(format!("--free: {e}"))),
-                }
-            }
-        }
-        let (pb, on_progress) = super::progress::stage_bar(kind.name());
+        },
+    };
+    let plans = compare_plans(&data, &kinds, &opts).map_err(|e| match e {
+        CompareError::Free(e) => CliError::Usage(format!("--free: {e}")),
+        e => CliError::Usage(e.to_string()),
+    })?;
+    let mut results: Vec<Identification> = Vec::new();
+    let n_plans = plans.len();
+    for (i, plan) in plans.into_iter().enumerate() {
+        let kind = plan.kind;
+        // one bar per model, named with its place in the list
+        let what = format!("model {}/{n_plans} {}", i + 1, kind.name());
+        let (pb, on_progress) = super::progress::stage_bar(&what);
         let id = nlsdof::identification::identify(&data, &plan, &on_progress);
         pb.finish_and_clear();
         results.push(id.map_err(|e| CliError::Usage(format!("{kind}: {e}")))?);

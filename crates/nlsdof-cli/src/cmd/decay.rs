@@ -6,7 +6,7 @@
 use crate::error::CliError;
 use nlsdof::identification::decay::{analyse, DecayOptions};
 use nlsdof::identification::time_domain::uniform_fs;
-use nlsdof_io::table_file::read_columns;
+use nlsdof_io::input::read_columns;
 use nlsdof_report::decay as report;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -41,9 +41,49 @@ pub struct Args {
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
-    /// SVG figure: record with envelope, backbone, damping curve.
-    #[arg(long, value_name = "FIG.svg")]
+    /// Figure (SVG or PNG, from the file name): record with envelope, backbone, damping curve.
+    #[arg(long, value_name = "FIG.svg|FIG.png")]
     pub plot: Option<PathBuf>,
+    /// Unit of the response column, stated on the figure's axes (default: the LVM header's
+    /// Y_Unit_Label of the column, else "unit as recorded").
+    #[arg(long, value_name = "UNIT")]
+    pub unit: Option<String>,
+}
+
+/// The unit of column `column` in a LabVIEW .lvm header (`Y_Unit_Label`,
+/// one entry per channel after the X column), if the file is one and says.
+fn lvm_unit(path: &std::path::Path, column: &str) -> Option<String> {
+    use std::io::Read as _;
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(256 * 1024)
+        .read_to_end(&mut head)
+        .ok()?;
+    let text = String::from_utf8_lossy(&head);
+    if !text.starts_with("LabVIEW Measurement") {
+        return None;
+    }
+    let mut units: Option<Vec<String>> = None;
+    for line in text.lines() {
+        let fields: Vec<&str> = line.split('\t').collect();
+        match fields.first().map(|f| f.trim()) {
+            Some("Y_Unit_Label") => {
+                units = Some(fields[1..].iter().map(|u| u.trim().to_string()).collect())
+            }
+            Some("X_Value") => {
+                let k = match column.trim().parse::<usize>() {
+                    Ok(k) => k,
+                    Err(_) => fields.iter().position(|f| f.trim() == column.trim())?,
+                };
+                // channel k - 1: the X column comes first
+                let u = units?.get(k.checked_sub(1)?)?.clone();
+                return (!u.is_empty()).then_some(u);
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 const DECAY_HELP: &str = "METHOD:
@@ -81,7 +121,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
             a.bins
         )));
     }
-    nlsdof_report::frf_plot::check_svg_name(a.plot.as_deref())?;
+    nlsdof_report::figure_file::check_plot_name(a.plot.as_deref())?;
     if let Some(p) = &a.plot {
         nlsdof_io::atomic::check_targets(&[("--plot", p)])?;
     }
@@ -97,51 +137,23 @@ pub fn run(a: Args) -> Result<(), CliError> {
             ));
         }
     }
+    // every format (CSV, LVM, Polytec, MAT, UFF) through the one reader;
+    // without --time-column the file's own time column (X_Value, t, time)
     let (x, fs, t0) = if let Some(fs) = a.fs {
-        let t = read_columns(&a.input, &[a.column.as_str()])?;
+        let t = read_columns(&a.input, &[a.column.as_str()], false)?;
         (t.columns.into_iter().next().unwrap_or_default(), fs, 0.0)
     } else {
-        let tc: Vec<&str> = match &a.time_column {
-            Some(c) => vec![c.as_str()],
-            None => vec!["X_Value", "t", "time"],
+        let t = match &a.time_column {
+            Some(c) => read_columns(&a.input, &[a.column.as_str(), c.as_str()], false)?,
+            None => read_columns(&a.input, &[a.column.as_str()], true)?,
         };
-        let mut last_err = None;
-        let mut got = None;
-        for c in tc {
-            match read_columns(&a.input, &[a.column.as_str(), c]) {
-                Ok(t) => {
-                    got = Some(t);
-                    break;
-                }
-                // this time column is not there: try the next one (no
-                // second pass over the file for the response column, which
-                // was found first; issue 30, class 10)
-                Err(e @ nlsdof_io::table_file::TableError::MissingColumn { .. }) if !matches!(&e, nlsdof_io::table_file::TableError::MissingColumn { wanted, .. } if wanted == a.column.trim()) =>
-                {
-                    last_err = Some(e);
-                }
-                Err(e) => {
-                    // a missing or bad response column is the error to report
-                    if let Err(e2) = read_columns(&a.input, &[a.column.as_str()]) {
-                        return Err(e2.into());
-                    }
-                    last_err = Some(e);
-                }
-            }
+        if t.columns.len() < 2 {
+            return Err(CliError::Usage(format!(
+                "{}: no time column ({}): give --time-column C or --fs HZ",
+                a.input.display(),
+                nlsdof_io::input::TIME_COLUMNS.join(", ")
+            )));
         }
-        if got.is_none() {
-            // the response column's own error, if it has one, comes first
-            read_columns(&a.input, &[a.column.as_str()])?;
-        }
-        let Some(t) = got else {
-            return Err(match (a.time_column.is_some(), last_err) {
-                (true, Some(e)) => e.into(),
-                _ => CliError::Usage(format!(
-                    "{}: no time column (X_Value, t, time): give --time-column C or --fs HZ",
-                    a.input.display()
-                )),
-            });
-        };
         let mut cols = t.columns.into_iter();
         let x = cols.next().unwrap_or_default();
         let time = cols.next().unwrap_or_default();
@@ -164,7 +176,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
         .map_err(|e| CliError::Usage(format!("{}: {e}", a.input.display())))?;
     let analyse_s = t_an.elapsed().as_secs_f64();
     if let Some(p) = &a.plot {
-        nlsdof_io::atomic::write_atomic(p, report::decay_svg(&x, fs, t0, &r)?.as_bytes())?;
+        let unit = a.unit.clone().or_else(|| lvm_unit(&a.input, &a.column));
+        let format = nlsdof_report::figure_file::plot_format(p);
+        let bytes = report::decay_figure(&x, fs, t0, &r, &a.column, unit.as_deref(), format)?;
+        nlsdof_io::atomic::write_atomic(p, &bytes)?;
     }
     let input = a.input.display().to_string();
     let rec = report::DecayRecord {

@@ -3,7 +3,12 @@
 //! helpers shared with `nlsdof compare` (data loading, options, reports).
 
 use crate::error::CliError;
-use nlsdof::identification::profile::{default_step, output_error_profile, OutputErrorProfile};
+use nlsdof::identification::inspect::{inspect, InspectOptions, Inspection, LawFit};
+use nlsdof::identification::models::{ETA, RHO};
+use nlsdof::identification::profile::{
+    default_step, output_error_profile_with, OutputErrorProfile,
+};
+use nlsdof::identification::Status;
 use nlsdof::identification::{
     identify, Dataset, FitPlan, FitSpec, GainChoice, JumpChoice, ModelKind, PhaseChoice,
     PhaseConvention, ReadingChoice, SignChoice, Weighting,
@@ -13,7 +18,7 @@ use nlsdof::SweepDirection;
 use nlsdof_io::stepped_sine_data::{read_beam_dir, read_csv, AmplitudeKind, ReadOptions, Runs};
 use std::path::{Path, PathBuf};
 
-use nlsdof_report::fit::{fit_svg, model_file_text};
+use nlsdof_report::fit::model_file_text;
 
 /// `--weighting` (see [`Weighting`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -114,7 +119,7 @@ impl DataArgs {
             .data
             .as_ref()
             .expect("clap requires DATA or --beam-dir");
-        if nlsdof_io::uff_convert::is_uff(path) {
+        if nlsdof_io::input::is_uff_file(path) {
             return self.load_uff(path).map_err(err);
         }
         if self.level_gamma.is_some() {
@@ -236,12 +241,23 @@ pub struct Args {
     /// Write the exponent landscape: FILE.json (grid), FILE.svg or FILE.png (heat map).
     #[arg(long, value_name = "FILE")]
     pub landscape: Option<PathBuf>,
-    /// Also give output-error profile-likelihood 95 % intervals of the free
+    /// Also compute output-error profile-likelihood 95 % intervals of the free
     /// exponents (rho, eta): refits with the exponent held, walked out from
     /// the optimum until (P - P*)/sigma^2 crosses chi2_1(0.95) = 3.84.
-    /// Costs a few to a few tens of local fits.
+    /// Costs a few to a few tens of local fits (a progress bar each). They
+    /// replace the Wald interval of the exponents in the table; a profile
+    /// that leaves out its own estimate (the fit did not reach the minimum
+    /// of its objective) is refused, with the reason.
     #[arg(long)]
     pub profile: bool,
+    /// Intervals shown: one (default: one 95 % interval per parameter, named by
+    /// its method: the output-error profile where --profile computed it, else
+    /// Wald, the linearised one) or all (also every other interval computed:
+    /// Wald, output-error profile, equation-error profile of the landscape,
+    /// each labelled with what it leaves out). The JSON always has them all,
+    /// and parameters[].interval the one shown.
+    #[arg(long, value_enum, default_value = "one", value_name = "one|all")]
+    pub intervals: IntervalsArg,
     /// Landscape grid: N (N x N) or NxM (rho nodes x eta nodes), each 1..=512.
     #[arg(long, value_name = "N[xM]", default_value = "41")]
     pub grid: String,
@@ -280,12 +296,19 @@ pub struct Args {
     /// zero-to-peak; the fit's own model curves, Eq 31).
     #[arg(long, value_name = "CURVES.csv")]
     pub predict: Option<PathBuf>,
-    /// Write an SVG of the data (dots) and the fitted model's sweeps (lines) per level.
-    #[arg(long, value_name = "FIG.svg")]
+    /// Write a figure (SVG or PNG, from the file name) of the data (markers) and the fitted
+    /// model's sweeps (lines) per level; up-sweeps solid, down-sweeps dashed.
+    #[arg(long, value_name = "FIG.svg|FIG.png")]
     pub plot: Option<PathBuf>,
     /// JSON output.
     #[arg(long)]
     pub json: bool,
+    /// Run `nlsdof inspect` on the data first (model-free backbone and damping laws, tens of
+    /// ms) and start the fit also from its exponents: the landscape node nearest to inspect's
+    /// rho and eta joins the race beside the landscape's own candidates. Inspect's estimates
+    /// and 95 % intervals are printed beside the fit's (JSON: "from_inspect").
+    #[arg(long = "from-inspect")]
+    pub from_inspect: bool,
     #[command(flatten)]
     pub pr: super::sign::PrArgs,
 }
@@ -601,20 +624,39 @@ pub fn resolve_mass(
 }
 
 /// The output-error profile intervals of the free exponents of the final
-/// fit, in steps of half their linearised standard error (0.05 without one).
+/// fit, in steps of half their linearised standard error (0.05 without one),
+/// each with a progress bar of its local fits (on a terminal).
 fn oe_profiles(id: &Identification) -> Result<Vec<OutputErrorProfile>, CliError> {
     let mut out = Vec::new();
-    for p in [Parameter::Rho, Parameter::Eta] {
-        let j = p as usize;
-        if id.spec.status[j] != nlsdof::identification::Status::Free {
-            continue;
-        }
+    let free: Vec<Parameter> = [Parameter::Rho, Parameter::Eta]
+        .into_iter()
+        .filter(|&p| id.spec.status[p as usize] == nlsdof::identification::Status::Free)
+        .collect();
+    for (i, &p) in free.iter().enumerate() {
         let step = default_step(&id.fit, p);
-        let prof = output_error_profile(&id.data, &id.spec, &id.fit.theta, p, step, 24)
-            .map_err(|e| CliError::Usage(format!("--profile: {e}")))?;
-        out.push(prof);
+        let what = format!("profile {} ({}/{})", p.info().name, i + 1, free.len());
+        let (pb, on_progress) = super::progress::fits_bar(&what);
+        let prof = output_error_profile_with(
+            &id.data,
+            &id.spec,
+            &id.fit.theta,
+            p,
+            step,
+            24,
+            nlsdof::cancel::Cancel::NEVER,
+            &on_progress,
+        );
+        pb.finish_and_clear();
+        out.push(prof.map_err(|e| CliError::Usage(format!("--profile: {e}")))?);
     }
     Ok(out)
+}
+
+/// `--intervals`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum IntervalsArg {
+    One,
+    All,
 }
 
 /// `--jump-reading`.
@@ -648,7 +690,36 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         None => None,
         Some(p) => Some(nlsdof_report::landscape::kind_of(p)?),
     };
+    // a model without a free exponent has a one-node landscape: nothing to
+    // draw, refused before the fit (its JSON still gives the node's cost)
+    if let (
+        Some(p),
+        Some(nlsdof_report::landscape::Kind::Svg | nlsdof_report::landscape::Kind::Png),
+    ) = (&args.landscape, landscape_kind)
+    {
+        use nlsdof::identification::models::Term;
+        let fixed = |n: &str| plan.fix.iter().any(|(f, _)| f == n);
+        let free = |n: &str, t: Term| {
+            !fixed(n) && (t == Term::FreeExponent || plan.free.iter().any(|f| f == n))
+        };
+        if !free("rho", kind.stiffness()) && !free("eta", kind.damping()) {
+            return Err(CliError::Usage(format!(
+                "--landscape {}: the {kind} model has no free exponent, so its landscape is a single node and there is nothing to draw; write FILE.json for its cost, or free an exponent (--model generalised, or --free rho)",
+                p.display()
+            )));
+        }
+    }
     let data = args.data.load()?;
+    let mut plan = plan;
+    let inspected = if args.from_inspect {
+        let r = inspect(&data, &InspectOptions::default()).map_err(|e| {
+            CliError::Usage(format!("--from-inspect: {}: {e}", args.data.source_name()))
+        })?;
+        plan.start_exponents = Some(r.exponent_start());
+        Some(r)
+    } else {
+        None
+    };
     let (pb, on_progress) = super::progress::stage_bar(kind.name());
     let id = identify(&data, &plan, &on_progress);
     pb.finish_and_clear();
@@ -670,7 +741,11 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         ));
     }
     if let Some(p) = &args.plot {
-        files.push((p.clone(), fit_svg(&id.data, res)?.into_bytes()));
+        let format = nlsdof_report::figure_file::plot_format(p);
+        files.push((
+            p.clone(),
+            nlsdof_report::fit::fit_figure(&id.data, res, format)?,
+        ));
     }
     if let (Some(p), Some(k)) = (&args.landscape, landscape_kind) {
         files.push((p.clone(), nlsdof_report::landscape::render(&id, k)?));
@@ -679,10 +754,8 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         nlsdof_io::atomic::write_atomic(p, bytes)?;
     }
     let profiles = if args.profile {
-        // refits with the exponent held: seconds to minutes, a spinner after 1 s
-        crate::cmd::simulate::with_spinner("profile likelihood of the exponents", || {
-            oe_profiles(&id)
-        })?
+        // refits with the exponent held: seconds to minutes, a bar per exponent
+        oe_profiles(&id)?
     } else {
         Vec::new()
     };
@@ -691,18 +764,120 @@ fn run_identify(args: &Args, kind: ModelKind, sign: super::sign::SignArg) -> Res
         if args.profile {
             v["identification"]["profile_oe_ci95"] = nlsdof_report::fit::profiles_json(&profiles);
         }
+        // the one interval per parameter, with its method (ci95 stays Wald)
+        nlsdof_report::intervals::add_chosen_json(&mut v, &id.fit, &profiles);
         if args.integer {
             v["integer_pairs"] = nlsdof_report::fit::integer_nodes_json(&id);
         }
+        if let Some(r) = &inspected {
+            v["from_inspect"] = from_inspect_json(r, &id);
+        }
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
-        print!("{}", nlsdof_report::fit::identification_report(&id, mass)?);
-        print!("{}", nlsdof_report::fit::profiles_text(&profiles));
+        let view = match args.intervals {
+            IntervalsArg::One => nlsdof_report::intervals::IntervalView::One,
+            IntervalsArg::All => nlsdof_report::intervals::IntervalView::All,
+        };
+        print!(
+            "{}",
+            nlsdof_report::fit::identification_report_with(&id, mass, &profiles, view)?
+        );
+        if let Some(r) = &inspected {
+            print!("{}", from_inspect_text(r, &id));
+        }
         if args.integer {
             print!("{}", nlsdof_report::fit::integer_nodes_text(&id));
         }
     }
     Ok(())
+}
+
+/// Per exponent: inspect's estimate and interval beside the fit's value and
+/// status.
+fn exponent_rows(
+    r: &Inspection,
+    id: &Identification,
+) -> Vec<(&'static str, Option<LawFit>, f64, Status)> {
+    vec![
+        (
+            "rho",
+            r.stiffness.fit.clone(),
+            id.fit.theta[RHO],
+            id.spec.status[RHO],
+        ),
+        (
+            "eta",
+            r.damping.fit.clone(),
+            id.fit.theta[ETA],
+            id.spec.status[ETA],
+        ),
+    ]
+}
+
+fn from_inspect_text(r: &Inspection, id: &Identification) -> String {
+    let mut out = String::from("\nFrom inspect (model-free laws, --from-inspect):\n");
+    for (name, law, value, status) in exponent_rows(r, id) {
+        let ins = match &law {
+            Some(f) => {
+                let ci = match f.exponent_ci95 {
+                    Some([a, b]) => format!(
+                        "95 % [{a:.3}, {b:.3}]{}",
+                        if f.interval_open { " (open)" } else { "" }
+                    ),
+                    None => "no interval".to_string(),
+                };
+                format!(
+                    "{:.3}  {ci}{}",
+                    f.exponent,
+                    if f.exponent_at_bound {
+                        ", at the end of its range: not used"
+                    } else {
+                        ""
+                    }
+                )
+            }
+            None => "not estimated".to_string(),
+        };
+        let fit = match status {
+            Status::Free => format!("{value:.4}"),
+            _ => format!("{value:.4} (held)"),
+        };
+        out.push_str(&format!("  {name:<4} inspect {ins};  fit {fit}\n"));
+    }
+    match id.start_node {
+        Some((rho, eta)) => out.push_str(&format!(
+            "  the race also started from the landscape node rho = {rho:.3}, eta = {eta:.3}\n"
+        )),
+        None => out.push_str(
+            "  no extra start: the model holds the exponents, or inspect determined neither\n",
+        ),
+    }
+    out
+}
+
+fn from_inspect_json(r: &Inspection, id: &Identification) -> serde_json::Value {
+    let mut v = serde_json::Map::new();
+    for (name, law, value, status) in exponent_rows(r, id) {
+        v.insert(
+            name.to_string(),
+            serde_json::json!({
+                "inspect": law.as_ref().map(|f| f.exponent),
+                "inspect_ci95": law.as_ref().and_then(|f| f.exponent_ci95),
+                "inspect_interval_open": law.as_ref().map(|f| f.interval_open),
+                "inspect_at_bound": law.as_ref().map(|f| f.exponent_at_bound),
+                "fit": value,
+                "fit_free": status == Status::Free,
+            }),
+        );
+    }
+    v.insert(
+        "start_node".to_string(),
+        match id.start_node {
+            Some((rho, eta)) => serde_json::json!({ "rho": rho, "eta": eta }),
+            None => serde_json::Value::Null,
+        },
+    );
+    serde_json::Value::Object(v)
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {

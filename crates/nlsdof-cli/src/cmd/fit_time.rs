@@ -8,9 +8,9 @@ use nlsdof::identification::time_domain::{
     SampleRange, TimeFitOptions, TimeRecord, MAX_SUBSTEPS,
 };
 use nlsdof::identification::ModelKind;
+use nlsdof_io::input::read_columns;
 use nlsdof_io::model_file::{model_to_toml, signal_to_toml, SignalMap};
 use nlsdof_io::signal_file::CsvWriter;
-use nlsdof_io::table_file::read_columns;
 use nlsdof_report::time_fit as report;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -30,10 +30,10 @@ pub struct Args {
     /// Output column: header name or 0-based index.
     #[arg(long, value_name = "C")]
     pub output_column: String,
-    /// Sampling frequency, Hz (or give --time-column).
+    /// Sampling frequency, Hz (default: from the file's time column X_Value, t or time).
     #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
     pub fs: Option<f64>,
-    /// Time column (s); must be uniformly sampled. Instead of --fs.
+    /// Time column (s); must be uniformly sampled. Instead of --fs (default: X_Value, t or time when present).
     #[arg(long, value_name = "C")]
     pub time_column: Option<String>,
     /// Estimation range A:B, 0-based half-open sample indices (default: the whole record,
@@ -211,15 +211,20 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 "give either --fs or --time-column, not both".into(),
             ))
         }
-        (None, None) => {
-            return Err(CliError::Usage(
-                "the sampling frequency is needed: give --fs HZ or --time-column C".into(),
-            ))
-        }
         (None, Some(t)) => cols.push(t.as_str()),
         _ => {}
     }
-    let table = read_columns(&a.input, &cols)?;
+    // every format through the one reader; without --fs or --time-column
+    // the file's own time column (LVM X_Value, CSV t or time)
+    let auto_time = a.fs.is_none() && a.time_column.is_none();
+    let table = read_columns(&a.input, &cols, auto_time)?;
+    if auto_time && table.columns.len() < 3 {
+        return Err(CliError::Usage(format!(
+            "{}: the sampling frequency is needed and the file has no time column ({}): give --fs HZ or --time-column C",
+            a.input.display(),
+            nlsdof_io::input::TIME_COLUMNS.join(", ")
+        )));
+    }
     let (u, y) = (&table.columns[0], &table.columns[1]);
     let (fs, t0) = match a.fs {
         Some(fs) => (fs, 0.0),

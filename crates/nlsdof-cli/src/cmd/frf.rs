@@ -95,8 +95,8 @@ pub struct Args {
     /// Print CSV (level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking) instead of the text summary.
     #[arg(long)]
     pub csv: bool,
-    /// Also write an SVG plot of amplitude vs frequency to FILE.
-    #[arg(long, value_name = "FILE.svg")]
+    /// Also write a plot of amplitude vs frequency to FILE (SVG or PNG, from the name).
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub plot: Option<PathBuf>,
     /// Also write the curves as a universal file (ASCII dataset 58, double precision): one
     /// complex FRF per level, receptance H = (a/gamma) e^(-j phi) in m/(m/s^2) over the
@@ -136,7 +136,7 @@ OUTPUT:
   --csv: header `level,gamma,f_hz,amplitude,phase_deg,sweep,stable,sticking`, then one row
         per swept point (level = 1-based index in the --gamma list), points in sweep order;
         a sticking point (Coulomb friction holds the mass) has amplitude 0 and an empty phase
-  --plot FILE.svg: amplitude vs frequency, one colour per level; stable branches solid,
+  --plot FILE.svg|FILE.png: amplitude vs frequency, one colour per level; stable branches solid,
         unstable dashed, backbone dotted grey, swept points as markers, jumps as arrows.
         The plot is written atomically: on any error no file is created.
   --uff FILE.uff: universal file, ASCII dataset 58 (double precision), one complex FRF
@@ -205,7 +205,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     // All checks first, all computation in memory; files are written last
     // and atomically, so an error never leaves a file behind.
-    plot::check_svg_name(args.plot.as_deref())?;
+    nlsdof_report::figure_file::check_plot_name(args.plot.as_deref())?;
     // clap requires these without --at
     let (Some(gamma_list), Some(f_min), Some(f_max), Some(steps)) =
         (&args.gamma, args.f_min, args.f_max, args.steps)
@@ -300,7 +300,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
 /// `--at DATA.csv`: the sweeps of the data's levels, frequencies and
 /// directions ([`nlsdof::identification::sweeps_at_data`]).
 fn run_at(args: &Args) -> Result<(), CliError> {
-    plot::check_svg_name(args.plot.as_deref())?;
+    nlsdof_report::figure_file::check_plot_name(args.plot.as_deref())?;
     let at = args.at.as_ref().expect("run_at needs --at");
     let (model, gain) = load_steady_model(&args.model)?;
     let data = nlsdof_io::stepped_sine_data::read_csv(at, &Default::default())
@@ -375,8 +375,9 @@ fn emit(
             f_max,
             levels,
         };
-        let svg = plot::render_frf(&input)?;
-        nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;
+        let format = nlsdof_report::figure_file::plot_format(path);
+        let bytes = plot::render_frf_as(&input, format)?;
+        nlsdof_io::atomic::write_atomic(path, &bytes)?;
         if !args.json && !args.csv {
             let _ = writeln!(stdout_text, "\nplot written to {}", path.display());
         }

@@ -3,8 +3,7 @@
 //! written as the FRF CSV that `nlsdof linear-id` reads.
 
 use crate::error::CliError;
-use nlsdof::signal_processing::{spectral_ratio, welch_frf, Symmetry, WelchOptions, Window};
-use serde_json::json;
+use nlsdof::signal_processing::{Symmetry, Window};
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -111,25 +110,14 @@ EXAMPLES:
 Errors are one line on stderr, exit code 2; no output file is left behind.";
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    use nlsdof_io::frf_file::read_channel;
-    let (fs_in, x) = read_channel(&args.input, &args.input_channel, args.fs)?;
-    let out_path = args
-        .output_file
-        .clone()
-        .unwrap_or_else(|| args.input.clone());
-    let out_key = args.output_channel.clone().unwrap_or_else(|| {
-        if args.output_file.is_some() {
-            "1".into()
-        } else {
-            "2".into()
-        }
-    });
-    let (fs_out, y) = read_channel(&out_path, &out_key, args.fs)?;
-    if (fs_in - fs_out).abs() > 1e-9 * fs_in {
-        return Err(CliError::Usage(format!(
-            "sampling frequencies differ: input {fs_in} Hz, output {fs_out} Hz"
-        )));
-    }
+    use nlsdof::signal_processing::{estimate_frf, FrfEstimateOptions, FrfMethod};
+    let (fs, x, y) = nlsdof_io::frf_file::read_channel_pair(
+        &args.input,
+        &args.input_channel,
+        args.output_file.as_deref(),
+        args.output_channel.as_deref(),
+        args.fs,
+    )?;
     if x.len() != y.len() {
         return Err(CliError::Usage(format!(
             "input has {} samples but output has {}: lengths must match",
@@ -137,7 +125,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
             y.len()
         )));
     }
-    let fs = fs_in;
     let f_lo = args.f_min.unwrap_or(0.0);
     let f_hi = args.f_max.unwrap_or(f64::INFINITY);
     if f_lo.is_nan() || f_hi.is_nan() || f_lo >= f_hi {
@@ -145,79 +132,40 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "--f-min {f_lo} / --f-max {f_hi}: need f-min < f-max"
         )));
     }
-    let (f, h, coh, averages, segment) = match args.method {
-        MethodArg::Ratio => {
-            let r = spectral_ratio(fs, &x, &y)?;
-            (r.frequency_hz, r.h, None, 1, x.len())
-        }
-        MethodArg::H1 | MethodArg::H2 => {
-            let window = match args.window {
-                WindowArg::Hann => Window::Hann,
-                WindowArg::Hamming => Window::Hamming,
-                WindowArg::Blackman => Window::Blackman,
-                WindowArg::Rectangular => Window::Rectangular,
-            };
-            let segment = args.segment.unwrap_or(4096.min(x.len()));
-            let opts = WelchOptions {
-                segment,
-                overlap: args.overlap,
-                window,
-                symmetry: if args.symmetric_window {
-                    Symmetry::Symmetric
-                } else {
-                    Symmetry::Periodic
-                },
-                detrend_mean: true,
-            };
-            let e = welch_frf(fs, &x, &y, &opts)?;
-            let h = if args.method == MethodArg::H1 {
-                e.h1
-            } else {
-                e.h2
-            };
-            (e.frequency_hz, h, Some(e.coherence), e.averages, segment)
-        }
+    let opts = FrfEstimateOptions {
+        method: match args.method {
+            MethodArg::H1 => FrfMethod::H1,
+            MethodArg::H2 => FrfMethod::H2,
+            MethodArg::Ratio => FrfMethod::Ratio,
+        },
+        segment: args.segment,
+        overlap: args.overlap,
+        window: match args.window {
+            WindowArg::Hann => Window::Hann,
+            WindowArg::Hamming => Window::Hamming,
+            WindowArg::Blackman => Window::Blackman,
+            WindowArg::Rectangular => Window::Rectangular,
+        },
+        symmetry: if args.symmetric_window {
+            Symmetry::Symmetric
+        } else {
+            Symmetry::Periodic
+        },
+        f_min: args.f_min,
+        f_max: args.f_max,
     };
-    // Drop DC and bins without input power (reported as exactly 0).
-    let keep: Vec<usize> = (0..f.len())
-        .filter(|&i| f[i] > 0.0 && f[i] >= f_lo && f[i] <= f_hi && h[i].norm() > 0.0)
-        .collect();
-    if keep.len() < 2 {
-        return Err(CliError::Usage(format!(
-            "fewer than 2 frequency lines with input power in [{f_lo}, {f_hi}] Hz"
-        )));
-    }
-    let fk: Vec<f64> = keep.iter().map(|&i| f[i]).collect();
-    let hk: Vec<(f64, f64)> = keep.iter().map(|&i| (h[i].re, h[i].im)).collect();
-    let ck: Option<Vec<f64>> = coh.as_ref().map(|c| keep.iter().map(|&i| c[i]).collect());
-    nlsdof_io::frf_file::write_frf_csv(&args.out, &fk, &hk, ck.as_deref())?;
-    let mean_coh = ck.as_ref().map(|c| c.iter().sum::<f64>() / c.len() as f64);
-    let method = match args.method {
-        MethodArg::H1 => "h1",
-        MethodArg::H2 => "h2",
-        MethodArg::Ratio => "ratio",
-    };
+    let e = estimate_frf(fs, &x, &y, &opts).map_err(|e| match e {
+        nlsdof::signal_processing::FrfEstimateError::Signal(s) => CliError::SignalProcessing(s),
+        e => CliError::Usage(e.to_string()),
+    })?;
+    let hk: Vec<(f64, f64)> = e.h.iter().map(|h| (h.re, h.im)).collect();
+    nlsdof_io::frf_file::write_frf_csv(&args.out, &e.frequency_hz, &hk, e.coherence.as_deref())?;
+    let out = args.out.display().to_string();
     if args.json {
-        println!(
-            "{}",
-            json!({"method": method, "fs": fs, "samples": x.len(), "segment": segment, "averages": averages,
-                   "resolution_hz": fs / segment as f64, "lines": fk.len(), "mean_coherence": mean_coh,
-                   "window": if args.method == MethodArg::Ratio { "none" } else { match args.window { WindowArg::Hann => "hann", WindowArg::Hamming => "hamming", WindowArg::Blackman => "blackman", WindowArg::Rectangular => "rectangular" } },
-                   "window_form": if args.symmetric_window { "symmetric" } else { "periodic" },
-                   "out": args.out.display().to_string()})
-        );
+        println!("{}", nlsdof_report::frf_estimate::json(&e, Some(&out)));
     } else {
-        println!(
-            "{method}: fs = {fs} Hz, {} samples, segment {segment} ({} averages), resolution {:.6} Hz, {} lines {:.6} .. {:.6} Hz{}",
-            x.len(),
-            averages,
-            fs / segment as f64,
-            fk.len(),
-            fk[0],
-            fk[fk.len() - 1],
-            mean_coh.map(|c| format!(", mean coherence {c:.4}")).unwrap_or_default()
-        );
-        println!("FRF written to {}", args.out.display());
+        println!("{}", nlsdof_report::frf_estimate::text(&e));
+        println!("FRF written to {out}");
     }
     Ok(())
 }

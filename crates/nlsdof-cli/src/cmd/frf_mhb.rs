@@ -117,8 +117,9 @@ pub fn run(
                 .unwrap_or_default(),
             sweep_name(args.sweep)
         );
-        let svg = report::sweep_svg(&title, &levels, f_min, f_max)?;
-        nlsdof_io::atomic::write_atomic(path, svg.as_bytes())?;
+        let format = nlsdof_report::figure_file::plot_format(path);
+        let bytes = report::sweep_figure(&title, &levels, f_min, f_max, format)?;
+        nlsdof_io::atomic::write_atomic(path, &bytes)?;
         if !args.json && !args.csv {
             let _ = writeln!(text, "\nplot written to {}", path.display());
         }

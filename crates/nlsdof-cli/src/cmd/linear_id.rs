@@ -92,8 +92,9 @@ pub struct Args {
     /// Print JSON instead of the text summary.
     #[arg(long)]
     pub json: bool,
-    /// Write an SVG plot: measured vs fitted magnitude and phase, and the Nyquist plot with the fitted circle.
-    #[arg(long, value_name = "FIG.svg")]
+    /// Write a figure (SVG or PNG, from the file name): measured vs fitted magnitude and phase,
+    /// and the Nyquist plot with the fitted circle.
+    #[arg(long, value_name = "FIG.svg|FIG.png")]
     pub plot: Option<PathBuf>,
 }
 
@@ -143,7 +144,7 @@ fn usage(msg: String) -> CliError {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    nlsdof_report::frf_plot::check_svg_name(args.plot.as_deref())?;
+    nlsdof_report::figure_file::check_plot_name(args.plot.as_deref())?;
     if args.max_iterations == 0 || args.max_iterations > 10_000 {
         return Err(usage(format!(
             "--max-iterations {}: need 1 to 10000 vector-fitting iterations",
@@ -177,6 +178,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         OutputArg::Velocity => OutputKind::Velocity,
         OutputArg::Acceleration => OutputKind::Acceleration,
     };
+    let input = match args.input {
+        InputArg::Force => InputKind::Force,
+        InputArg::Acceleration => InputKind::Acceleration,
+    };
     let frf = MeasuredFrf {
         omega: table.f_hz.iter().map(|f| 2.0 * PI * f).collect(),
         magnitude: table.magnitude.clone(),
@@ -188,10 +193,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let opts = SdofIdOptions {
         band: (2.0 * PI * f_lo, 2.0 * PI * f_hi),
         poles,
-        input: match args.input {
-            InputArg::Force => InputKind::Force,
-            InputArg::Acceleration => InputKind::Acceleration,
-        },
+        input,
         output,
         mass: args.mass,
         mode: args.mode,
@@ -220,7 +222,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         None => None,
     };
     let svg = match &args.plot {
-        Some(_) => Some(report::svg(&id, &f_hz, output)?),
+        Some(p) => Some(report::figure_as(
+            &id,
+            &f_hz,
+            input,
+            output,
+            nlsdof_report::figure_file::plot_format(p),
+        )?),
         None => None,
     };
     let text = if args.json {
@@ -240,7 +248,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let (Some(path), Some(s)) = (&args.plot, &svg) {
         // Committed together with --out at the end of the run (all or nothing).
-        nlsdof_io::atomic::write_atomic(path, s.as_bytes())?;
+        nlsdof_io::atomic::write_atomic(path, s)?;
     }
     print!("{text}");
     Ok(())

@@ -42,3 +42,23 @@ pub fn stage_bar(what: &str) -> (indicatif::ProgressBar, impl Fn(IdentifyProgres
     };
     (pb, on)
 }
+
+/// A bar of local fits labelled `what` (`fit --profile`: one profile of an
+/// exponent, at most `1 + 2 × 24` fits; a side ends early when it crosses
+/// the threshold), and the `progress(done, most)` callback that moves it.
+pub fn fits_bar(what: &str) -> (indicatif::ProgressBar, impl Fn(usize, usize) + Sync) {
+    let pb =
+        indicatif::ProgressBar::with_draw_target(Some(1), indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{msg} [{bar:30}] {pos}/{len} local fits at most ({elapsed})",
+    ) {
+        pb.set_style(style);
+    }
+    pb.set_message(what.to_string());
+    let bar = pb.clone();
+    let on = move |done: usize, most: usize| {
+        bar.set_length(most as u64);
+        bar.set_position(done as u64);
+    };
+    (pb, on)
+}

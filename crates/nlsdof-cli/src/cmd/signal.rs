@@ -3,9 +3,8 @@
 
 use super::simulate::Progress;
 use crate::error::CliError;
-use nlsdof::excitation::{Dwell, Excitation, LinearChirp, LogChirp, Sine, SteppedSine};
+use nlsdof::signal_generator::{build, GeneratedSignal, Param, SignalSpec, SignalSpecError};
 use nlsdof_io::signal_file::CsvWriter;
-use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -102,33 +101,21 @@ pub enum Kind {
     },
 }
 
-fn positive(flag: &str, v: f64) -> Result<f64, CliError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(CliError::Usage(format!(
-            "{flag} {v} is not allowed: must be a finite number > 0"
-        )))
+/// The library's error with the parameters named by their flags.
+fn usage(e: SignalSpecError) -> CliError {
+    match e {
+        SignalSpecError::Excitation(e) => CliError::Simulation(e),
+        e => CliError::Usage(e.render(Param::flag)),
     }
 }
 
-/// Largest number of samples a signal may have.
-const MAX_SAMPLES: f64 = 1e10;
-
-fn write<E: Excitation>(e: &E, c: &Common, duration: f64) -> Result<(), CliError> {
-    let fs = c.fs;
-    let n = (duration * fs).floor() + 1.0;
-    if n > MAX_SAMPLES {
-        return Err(CliError::Usage(format!(
-            "{n} samples is too many (duration {duration} s at {fs} Hz)"
-        )));
-    }
-    let n = n as u64;
+fn write(g: &GeneratedSignal, c: &Common) -> Result<(), CliError> {
+    let (n, fs, duration) = (g.samples, g.fs, g.duration);
     let mut w = CsvWriter::create(&c.out, &["t", "accel"])?;
     let progress = Progress::new(n, "writing signal");
     for k in 0..n {
-        let t = k as f64 / fs;
-        w.row(&[t, e.accel(t)])?;
+        let (t, a) = g.sample(k);
+        w.row(&[t, a])?;
         if k & 0xffff == 0 {
             progress.set(k);
         }
@@ -142,22 +129,23 @@ fn write<E: Excitation>(e: &E, c: &Common, duration: f64) -> Result<(), CliError
     Ok(())
 }
 
-pub fn run(a: Args) -> Result<(), CliError> {
-    match a.kind {
+/// The library's description of the signal `kind` and its common options.
+fn spec(kind: Kind) -> (SignalSpec, Common) {
+    match kind {
         Kind::Sine {
             common,
             freq,
             duration,
             phase_deg,
-        } => {
-            positive("--fs", common.fs)?;
-            let s = Sine::new(
-                common.amplitude,
-                TAU * positive("--freq", freq)?,
-                phase_deg.to_radians(),
-            )?;
-            write(&s, &common, positive("--duration", duration)?)
-        }
+        } => (
+            SignalSpec::Sine {
+                amplitude: common.amplitude,
+                freq,
+                duration,
+                phase_deg,
+            },
+            common,
+        ),
         Kind::Chirp {
             common,
             kind,
@@ -165,54 +153,20 @@ pub fn run(a: Args) -> Result<(), CliError> {
             f1,
             rate,
             duration,
-        } => {
-            positive("--fs", common.fs)?;
-            positive("--f0", f0)?;
-            match kind {
-                ChirpKind::Linear => {
-                    let (rate, duration) = match (f1, rate, duration) {
-                        (Some(f1), None, Some(d)) => ((positive("--f1", f1)? - f0) / positive("--duration", d)?, d),
-                        (None, Some(r), Some(d)) => (r, positive("--duration", d)?),
-                        (Some(f1), Some(r), None) => {
-                            let d = (positive("--f1", f1)? - f0) / r;
-                            (r, positive("duration (f1 - f0)/rate", d)?)
-                        }
-                        _ => {
-                            return Err(CliError::Usage(
-                                "a linear chirp needs two of --f1, --rate, --duration (e.g. --f0 4.5 --rate 0.005 --f1 6)".into(),
-                            ))
-                        }
-                    };
-                    if !rate.is_finite() {
-                        return Err(CliError::Usage(format!(
-                            "--rate {rate} is not a finite number"
-                        )));
-                    }
-                    let end = f0 + rate * duration;
-                    if end <= 0.0 {
-                        return Err(CliError::Usage(format!(
-                            "the chirp would reach {end} Hz <= 0 before its end"
-                        )));
-                    }
-                    let c = LinearChirp::from_rate(common.amplitude, TAU * f0, TAU * rate)?;
-                    write(&c, &common, duration)
-                }
-                ChirpKind::Log => {
-                    let (Some(f1), Some(d), None) = (f1, duration, rate) else {
-                        return Err(CliError::Usage(
-                            "a logarithmic chirp needs --f1 and --duration (and no --rate)".into(),
-                        ));
-                    };
-                    let c = LogChirp::new(
-                        common.amplitude,
-                        TAU * f0,
-                        TAU * positive("--f1", f1)?,
-                        positive("--duration", d)?,
-                    )?;
-                    write(&c, &common, d)
-                }
-            }
-        }
+        } => (
+            SignalSpec::Chirp {
+                amplitude: common.amplitude,
+                kind: match kind {
+                    ChirpKind::Linear => nlsdof::signal_generator::ChirpKind::Linear,
+                    ChirpKind::Log => nlsdof::signal_generator::ChirpKind::Log,
+                },
+                f0,
+                f1,
+                rate,
+                duration,
+            },
+            common,
+        ),
         Kind::SteppedSine {
             common,
             f_min,
@@ -221,38 +175,26 @@ pub fn run(a: Args) -> Result<(), CliError> {
             sweep,
             dwell_cycles,
             dwell,
-        } => {
-            positive("--fs", common.fs)?;
-            positive("--f-min", f_min)?;
-            if !(f_max.is_finite() && f_max > f_min) {
-                return Err(CliError::Usage(format!(
-                    "--f-max {f_max} must be finite and > --f-min {f_min}"
-                )));
-            }
-            if !(2..=nlsdof::stepped_sine::MAX_STEPS).contains(&steps) {
-                return Err(CliError::Usage(format!(
-                    "--steps {steps}: need 2 to {}",
-                    nlsdof::stepped_sine::MAX_STEPS
-                )));
-            }
-            let dw = match (dwell_cycles, dwell) {
-                (Some(c), None) => Dwell::Cycles(c),
-                (None, Some(s)) => Dwell::Seconds(positive("--dwell", s)?),
-                _ => {
-                    return Err(CliError::Usage(
-                        "give the dwell per step: --dwell-cycles N or --dwell SECONDS".into(),
-                    ))
-                }
-            };
-            let mut omegas: Vec<f64> = (0..steps)
-                .map(|i| TAU * (f_min + (f_max - f_min) * i as f64 / (steps - 1) as f64))
-                .collect();
-            if sweep == Direction::Down {
-                omegas.reverse();
-            }
-            let s = SteppedSine::new(common.amplitude, omegas, dw)?;
-            let d = s.duration();
-            write(&s, &common, d)
-        }
+        } => (
+            SignalSpec::SteppedSine {
+                amplitude: common.amplitude,
+                f_min,
+                f_max,
+                steps,
+                sweep: match sweep {
+                    Direction::Up => nlsdof::SweepDirection::Up,
+                    Direction::Down => nlsdof::SweepDirection::Down,
+                },
+                dwell_cycles,
+                dwell,
+            },
+            common,
+        ),
     }
+}
+
+pub fn run(a: Args) -> Result<(), CliError> {
+    let (spec, common) = spec(a.kind);
+    let g = build(&spec, common.fs).map_err(usage)?;
+    write(&g, &common)
 }

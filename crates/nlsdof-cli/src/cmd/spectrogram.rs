@@ -159,16 +159,15 @@ struct Record {
     column: String,
 }
 
-fn is_mat(path: &Path) -> bool {
-    path.extension()
-        .map(|e| e.eq_ignore_ascii_case("mat"))
-        .unwrap_or(false)
-}
-
 fn load(path: &Path, column: Option<&str>, fs: Option<f64>) -> Result<Record, CliError> {
-    if let (Some(name), false) = (column, is_mat(path)) {
-        return read_csv_column(path, name, fs);
+    if let Some(fs) = fs {
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(CliError::Usage(format!(
+                "--fs {fs} must be finite and > 0 Hz"
+            )));
+        }
     }
+    // every format (CSV, LVM, Polytec, MAT, UFF) through the one reader
     let s = read_signal(path, fs, column)?;
     match s.grid {
         SignalGrid::Uniform { t0, fs } => Ok(Record {
@@ -186,28 +185,6 @@ fn non_uniform(path: &Path) -> CliError {
         "{}: the time column is not uniformly sampled (to within {UNIFORM_TOLERANCE} of a step): a spectrogram needs uniform sampling",
         path.display()
     ))
-}
-
-/// Reads one named column of a CSV with a header (and, if present, its time
-/// column `t`/`time`/`t_s`).
-fn read_csv_column(path: &Path, name: &str, fs: Option<f64>) -> Result<Record, CliError> {
-    if let Some(fs) = fs {
-        if !(fs.is_finite() && fs > 0.0) {
-            return Err(CliError::Usage(format!(
-                "--fs {fs} must be finite and > 0 Hz"
-            )));
-        }
-    }
-    let s = nlsdof_io::signal_file::read_csv_column(path, name, fs)?;
-    match s.grid {
-        SignalGrid::Uniform { t0, fs } => Ok(Record {
-            values: s.values,
-            t0,
-            fs,
-            column: name.to_string(),
-        }),
-        SignalGrid::Times(_) => Err(non_uniform(path)),
-    }
 }
 
 fn stft_err(e: nlsdof::signal_processing::stft::StftError) -> CliError {

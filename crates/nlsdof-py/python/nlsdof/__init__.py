@@ -11,7 +11,9 @@ reduced-order models".
 Entry points: ``g``, ``Model`` (steady_states, sweep, simulate,
 stepped_sine, harmonic_sweep, hb_error), ``fit`` with ``read_stepped_sine``/``read_beam_dir``,
 ``linear_id``, ``spectrogram``, ``compare_spectrograms``, ``decay``,
-``fit_time``. Every error of the
+``fit_time``; readers ``read_lvm``, ``read_polytec``, ``read_polytec_sweep``,
+``read_mat``, ``read_uff``; the verbs ``frf_estimate``, ``compare`` and
+``signal``. Their docstrings carry runnable examples. Every error of the
 library is a ``ValueError`` with the same one-line message as the CLI.
 """
 
@@ -27,16 +29,23 @@ from ._nlsdof import (
     Spectrogram,
     Sweep,
     __version__,
+    compare,
     compare_spectrograms,
     decay,
     fit,
     fit_time,
+    frf_estimate,
     g,
     inspect,
     linear_id,
     read_beam_dir,
+    read_lvm,
+    read_mat,
+    read_polytec,
+    read_polytec_sweep,
     read_stepped_sine,
     read_uff,
+    signal,
     spectrogram,
     write_uff,
 )
@@ -53,16 +62,23 @@ __all__ = [
     "Spectrogram",
     "Sweep",
     "__version__",
+    "compare",
     "compare_spectrograms",
     "decay",
     "fit",
     "fit_time",
+    "frf_estimate",
     "g",
     "inspect",
     "linear_id",
     "read_beam_dir",
+    "read_lvm",
+    "read_mat",
+    "read_polytec",
+    "read_polytec_sweep",
     "read_stepped_sine",
     "read_uff",
+    "signal",
     "spectrogram",
     "write_uff",
 ]

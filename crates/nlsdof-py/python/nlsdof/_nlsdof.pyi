@@ -40,6 +40,13 @@ __all__ = [
     "inspect",
     "read_uff",
     "write_uff",
+    "read_lvm",
+    "read_polytec",
+    "read_polytec_sweep",
+    "read_mat",
+    "frf_estimate",
+    "compare",
+    "signal",
     "__version__",
 ]
 
@@ -57,6 +64,9 @@ class _Columns(Protocol):
 
 # what `fit` and `inspect` take as data (a str is read as a CSV path)
 _Data = SteppedSineData | _Path | _Columns
+# `progress=` of the long calls: None (quiet), True (a tqdm bar, plain lines
+# on stderr without tqdm) or a callable progress(stage, done, total)
+_Progress = bool | Callable[[str, int, int], object] | None
 
 def g(mu: float) -> float:
     """The shape factor of the equivalent coefficients (paper Eq 12/24):
@@ -339,6 +349,7 @@ class Simulation:
     def integration_error(self) -> float | None: ...
     @property
     def warning(self) -> str | None: ...
+    def _repr_html_(self) -> str: ...
     def __len__(self) -> int: ...
     def __getitem__(self, i: int, /) -> NDArray[np.float64]: ...
     def __iter__(self) -> Iterator[NDArray[np.float64]]: ...
@@ -411,12 +422,21 @@ class FitResult:
     def to_dict(self) -> dict[str, Any]: ...
     def to_toml(self) -> str: ...
     def profile(
-        self, parameter: str = "rho", step: float | None = None, max_steps: int = 24
+        self,
+        parameter: str = "rho",
+        step: float | None = None,
+        max_steps: int = 24,
+        *,
+        progress: _Progress = None,
     ) -> dict[str, Any]: ...
-    def report(self) -> str: ...
+    def report(self, intervals: str | None = None) -> str: ...
     def fitted_curves(self) -> dict[str, Any]: ...
     def plot(self, ax: Any = None) -> Any:
         """matplotlib: returns the Axes (needs matplotlib)."""
+    def landscape(self) -> dict[str, Any]:
+        """The exponent landscape document (rho, eta, cost, minima, fitted)."""
+    def plot_landscape(self, ax: Any = None) -> Any:
+        """matplotlib map (or 1-D profile) of the landscape: returns the Axes."""
     def to_dataframe(self) -> Any:
         """A pandas DataFrame (needs pandas)."""
     @overload
@@ -462,6 +482,9 @@ def fit(
     refine: int | None = None,
     starts: int = 1,
     seed: int = 1,
+    intervals: str = "one",
+    progress: _Progress = None,
+    from_inspect: bool = False,
 ) -> FitResult: ...
 
 @final
@@ -475,6 +498,9 @@ class Spectrogram:
     def frequencies(self) -> NDArray[np.float64]: ...
     @property
     def magnitude(self) -> NDArray[np.float64]: ...
+    def plot(self, ax: Any = None) -> Any:
+        """matplotlib heat map in dB: returns the Axes (needs matplotlib)."""
+    def _repr_html_(self) -> str: ...
 
 def linear_id(
     f_hz: ArrayLike,
@@ -539,6 +565,7 @@ def fit_time(
     max_iterations: int = 400,
     input_interpolation: str = "cubic",
     substeps: int | None = None,
+    progress: _Progress = None,
 ) -> dict[str, Any]: ...
 def inspect(data: _Data, phase: str = "auto", min_jump_ratio: float = 1.2) -> dict[str, Any]: ...
 def read_uff(
@@ -549,3 +576,67 @@ def write_uff(
     datasets: dict[str, Any] | Iterable[dict[str, Any]],
     binary: bool = False,
 ) -> None: ...
+def read_lvm(path: _Path, columns: Sequence[str] | None = None) -> dict[str, NDArray[np.float64]]:
+    """The columns of a LabVIEW `.lvm` (or any delimited text table) by name."""
+
+def read_polytec(path: _Path) -> dict[str, NDArray[np.float64]]:
+    """A Polytec ASCII time export: `t` (s) and the channel by its `Signal:` name."""
+
+def read_polytec_sweep(path: _Path) -> list[dict[str, NDArray[np.float64]]]:
+    """The runs of a Polytec swept-sine FRF export: `f_hz`, `amplitude`, `phase_deg`."""
+
+def read_mat(path: _Path, variables: Sequence[str] | None = None) -> dict[str, NDArray[np.float64]]:
+    """The real numeric arrays of a MAT v5 file, by variable name, in MATLAB shape."""
+
+def frf_estimate(
+    input: _Path | ArrayLike,
+    output: _Path | ArrayLike | None = None,
+    *,
+    fs: float | None = None,
+    input_channel: str = "1",
+    output_channel: str | None = None,
+    method: str = "h1",
+    segment: int | None = None,
+    overlap: float = 0.5,
+    window: str = "hann",
+    symmetric_window: bool = False,
+    f_min: float | None = None,
+    f_max: float | None = None,
+    out: _Path | None = None,
+) -> dict[str, Any]:
+    """`nlsdof frf-estimate --json`, plus `f_hz`, `frf` and `coherence` arrays."""
+
+def compare(
+    data: _Data,
+    models: str | Sequence[str] | None = None,
+    *,
+    free: str | Sequence[str] | None = None,
+    starts: int | None = None,
+    seed: int = 1,
+    mass: float | None = None,
+    sign: str = "data",
+    progress: Any = None,
+) -> dict[str, Any]:
+    """`nlsdof compare --json`: `{"models": [document, ...]}`."""
+
+def signal(
+    kind: str,
+    *,
+    amplitude: float,
+    fs: float,
+    freq: float | None = None,
+    duration: float | None = None,
+    phase_deg: float = 0.0,
+    chirp_kind: str = "linear",
+    f0: float | None = None,
+    f1: float | None = None,
+    rate: float | None = None,
+    f_min: float | None = None,
+    f_max: float | None = None,
+    steps: int | None = None,
+    sweep: str = "up",
+    dwell_cycles: int | None = None,
+    dwell: float | None = None,
+    out: _Path | None = None,
+) -> dict[str, NDArray[np.float64]]:
+    """`nlsdof signal KIND`: `{"t": ..., "accel": ...}` (s, m/s^2)."""

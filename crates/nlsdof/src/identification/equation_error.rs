@@ -995,6 +995,7 @@ pub(crate) fn solve_magnitude_to(
         gtol: xtol,
         cost_floor: 1e-28 * prep.points.len() as f64,
         decrement_tol: 0.0,
+        cancel: crate::cancel::Cancel::NEVER,
     };
     let mut best: Option<super::levenberg_marquardt::LmResult> = None;
     let run = |s: &[f64], best: &mut Option<super::levenberg_marquardt::LmResult>| {

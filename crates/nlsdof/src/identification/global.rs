@@ -179,6 +179,9 @@ pub fn multistart_below<P: LeastSquares>(
                 if i == 0 {
                     return f64::NEG_INFINITY;
                 }
+                if opts.cancel.is_cancelled() {
+                    return f64::INFINITY;
+                }
                 let uc: Vec<f64> = (0..n).map(|k| u[k].max(lo[k]).min(hi[k])).collect();
                 problem
                     .residuals(&uc)
@@ -206,7 +209,9 @@ pub fn multistart_below<P: LeastSquares>(
     let mut basins: Vec<(Vec<f64>, f64, f64)> = Vec::new();
     let mut runs = 0;
     let mut next = 0;
-    while runs < budget && next < order.len() {
+    // (a cancelled search stops between batches; its caller reports the
+    // interruption, `LmOptions::cancel`)
+    while runs < budget && next < order.len() && !opts.cancel.is_cancelled() {
         let mut batch = Vec::new();
         while batch.len() < BATCH.min(budget - runs) && next < order.len() {
             let i = order[next];

@@ -25,7 +25,8 @@
 //!    regressors (errors in variables), which biases this test: it only
 //!    chooses the starts; stage 5 decides.
 //! 4. **Candidates race** (`race`): from each of the best `refine`
-//!    candidates (and the best node of each third of each exponent's range),
+//!    candidates (and the best node of each third of each exponent's range,
+//!    and the node nearest to [`FitPlan::start_exponents`] when given),
 //!    its equation error solved again with the provisional gain, the output
 //!    error of [`ResponseBranch::Measured`] ([`super::output_error`]: each
 //!    point against the model state the measured sweep was on, continuous
@@ -109,7 +110,7 @@ use super::equation_error::{
 };
 use super::flags::Inactive;
 use super::landscape::{
-    landscape_with_progress, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval,
+    landscape_cancellable, Axis, Landscape, LandscapeError, LandscapePhase, ProfileInterval,
 };
 use super::levenberg_marquardt::{LmOptions, Termination};
 use super::models::*;
@@ -386,6 +387,53 @@ pub struct FitPlan {
     /// kept when that converges) and judged (cost, residuals, intervals) on
     /// all points.
     pub refine_points: usize,
+    /// Exponents from elsewhere (e.g. the model-free backbone and damping
+    /// laws of [`super::inspect`]) to start from: the landscape node
+    /// nearest to them joins the candidates of the race (module docs,
+    /// stage 4) beside the landscape's own minima. `None` (default): the
+    /// landscape's candidates only.
+    pub start_exponents: Option<ExponentStart>,
+}
+
+/// Exponents to start the output error from ([`FitPlan::start_exponents`]);
+/// an exponent left `None` is taken at the landscape's best node along the
+/// other.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ExponentStart {
+    pub rho: Option<f64>,
+    pub eta: Option<f64>,
+}
+
+/// The landscape node nearest to `start`: on each axis the node nearest to
+/// the given exponent; an exponent not given, the lowest-cost node along
+/// that axis at the other's node. `None` if neither is given or the
+/// landscape has no solved node there.
+pub fn nearest_node(land: &Landscape, start: &ExponentStart) -> Option<(usize, usize)> {
+    let nearest = |axis: &[f64], v: f64| -> Option<usize> {
+        if !v.is_finite() {
+            return None;
+        }
+        (0..axis.len()).min_by(|&a, &b| (axis[a] - v).abs().total_cmp(&(axis[b] - v).abs()))
+    };
+    let (i, j) = match (start.rho, start.eta) {
+        (None, None) => return None,
+        (Some(r), Some(e)) => (nearest(&land.rho, r)?, nearest(&land.eta, e)?),
+        (Some(r), None) => {
+            let i = nearest(&land.rho, r)?;
+            let j = (0..land.eta.len())
+                .filter(|&j| land.at(i, j).is_finite())
+                .min_by(|&a, &b| land.at(i, a).total_cmp(&land.at(i, b)))?;
+            (i, j)
+        }
+        (None, Some(e)) => {
+            let j = nearest(&land.eta, e)?;
+            let i = (0..land.rho.len())
+                .filter(|&i| land.at(i, j).is_finite())
+                .min_by(|&a, &b| land.at(a, j).total_cmp(&land.at(b, j)))?;
+            (i, j)
+        }
+    };
+    land.at(i, j).is_finite().then_some((i, j))
 }
 
 impl FitPlan {
@@ -414,6 +462,7 @@ impl FitPlan {
             },
             landscape_points: 2000,
             refine_points: 1500,
+            start_exponents: None,
         }
     }
 
@@ -487,6 +536,9 @@ pub enum IdentifyError {
     BadJumpWeight(f64),
     #[error("no candidate of the landscape could be refined: {0}")]
     NoCandidate(String),
+    /// Cancelled through `plan.lm.cancel` ([`crate::cancel`]): no result.
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }
 
 /// The gain decision of [`GainChoice::Auto`].
@@ -626,6 +678,9 @@ pub struct Identification {
     pub adequacy: Adequacy,
     /// With [`SignChoice::Both`]: the best objective of each sign.
     pub sign_trials: Vec<SignTrial>,
+    /// The landscape node `(ρ, η)` that joined the race from
+    /// [`FitPlan::start_exponents`], if any.
+    pub start_node: Option<(f64, f64)>,
 }
 
 impl Identification {
@@ -656,7 +711,14 @@ impl Identification {
     ///   be in mm.
     pub fn unit_hint(&self) -> Option<String> {
         let gain = self.fit.theta[GAIN];
+        // a free gain stopped by its bound (10 by default: within 3 % of
+        // g) measures nothing but the bound: amplitudes in mm push it
+        // there, and it must not read as "levels in g"
+        let (lo, hi) = self.spec.bounds[GAIN];
+        let at_bound = (gain - hi).abs() <= 1e-6 * hi.abs().max(1.0)
+            || (gain - lo).abs() <= 1e-6 * lo.abs().max(1.0);
         if matches!(self.fit.status[GAIN], Status::Free)
+            && !at_bound
             && (gain / G_STANDARD - 1.0).abs() <= G_HINT_TOLERANCE
         {
             return Some(format!(
@@ -674,7 +736,7 @@ impl Identification {
             .iter()
             .filter_map(|c| {
                 let k = c.peak_index();
-                let g = c.gamma * gain;
+                let g = c.gamma * if at_bound { 1.0 } else { gain };
                 (g > 0.0).then(|| c.amplitudes[k] * c.omegas[k] * c.omegas[k] / g)
             })
             .fold(0.0f64, f64::max);
@@ -844,10 +906,23 @@ pub fn identify(
     validate(plan)?;
     let setup = prepare(data, plan)?;
     let ex = explore(&setup, progress)?;
+    // (cancellation: every fit polls `plan.lm.cancel`; the stages are
+    // checked here so that a cancelled run returns no partial result)
+    let cancel = plan.lm.cancel;
+    cancel.check()?;
     let (gain_test, gain_status) = screen_gain(&setup, &ex);
     let mut fit_data = data_as_fitted(&setup, &ex);
     let mut refine_data = subsample(&fit_data, plan.refine_points);
-    let nodes = candidate_nodes(&ex.land, plan.refine.max(1));
+    let mut nodes = candidate_nodes(&ex.land, plan.refine.max(1));
+    let start_node = plan
+        .start_exponents
+        .as_ref()
+        .and_then(|s| nearest_node(&ex.land, s));
+    if let Some(n) = start_node {
+        if !nodes.contains(&n) {
+            nodes.push(n);
+        }
+    }
     let signs = |ee: &EquationErrorFit| -> Vec<Sign> {
         match plan.sign {
             SignChoice::Hardening => vec![Sign::Hardening],
@@ -873,6 +948,7 @@ pub fn identify(
         true,
         progress,
     )?;
+    cancel.check()?;
     let race_winner = winner.clone();
     let mut gain_test = gain_test;
     let race_objective = winner.objective;
@@ -884,6 +960,7 @@ pub fn identify(
         &mut gain_test,
         progress,
     )?;
+    cancel.check()?;
     let (mut curves, mut adequacy) = judge(&fit_data, &best);
     if !adequacy.adequate && plan.escalate {
         let (alt, tried, more) = escalate(
@@ -928,6 +1005,7 @@ pub fn identify(
     // fits, and a stuck fit must not be "explained" by early departures
     // (measured: a blind in-family set whose exact fit had a fold 22 steps
     // off was censored at two levels and ended at 1000x the truth's cost).
+    cancel.check()?;
     if !adequacy.adequate && plan.reading == ReadingChoice::Auto {
         let start = restarted(&best.spec, &best.fit.theta);
         let on_sub = Fitted {
@@ -967,7 +1045,9 @@ pub fn identify(
     if let Some(conv) = phase_conv.as_mut() {
         best = bake_phase_offset(best, &mut fit_data, &mut refine_data, conv)?;
     }
+    cancel.check()?;
     let Fitted { fit, spec, .. } = best;
+    let start_node = start_node.map(|(i, j)| (ex.land.rho[i], ex.land.eta[j]));
     Ok(Identification {
         fit,
         jump_weight: spec.jump_weight,
@@ -987,6 +1067,7 @@ pub fn identify(
         curves,
         adequacy,
         sign_trials,
+        start_node,
     })
 }
 
@@ -1080,15 +1161,18 @@ fn explore(
         name: "landscape",
         steps: eta_axis.n.max(1),
     });
-    let land = match landscape_with_progress(
+    let cancel = setup.plan.lm.cancel;
+    let land = match landscape_cancellable(
         &setup.prep,
         setup.terms_free,
         rho_axis,
         eta_axis,
         setup.phase_mode,
         &step,
+        cancel,
     ) {
         Ok(l) => l,
+        Err(LandscapeError::Interrupted(i)) => return Err(i.into()),
         Err(e) if setup.plan.gain == GainChoice::Auto => {
             let t = Terms {
                 gain: Some(1.0),
@@ -1098,8 +1182,12 @@ fn explore(
                 name: "landscape",
                 steps: eta_axis.n.max(1),
             });
-            landscape_with_progress(&setup.prep, t, rho_axis, eta_axis, setup.phase_mode, &step)
-                .map_err(|_| e)?
+            let phase = setup.phase_mode;
+            landscape_cancellable(&setup.prep, t, rho_axis, eta_axis, phase, &step, cancel)
+                .map_err(|e2| match e2 {
+                    LandscapeError::Interrupted(i) => i.into(),
+                    _ => IdentifyError::from(e),
+                })?
         }
         Err(e) => return Err(e.into()),
     };
@@ -3022,6 +3110,32 @@ fn start_from(spec: &mut FitSpec, ee: &EquationErrorFit, integer: bool) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Oracle: a hand-made 3 x 3 landscape, the nearest node on each axis
+    /// by inspection, the lowest-cost node along the axis not given.
+    #[test]
+    fn nearest_node_picks_the_closest_and_the_best_along() {
+        let land = Landscape {
+            rho: vec![0.0, 1.0, 2.0],
+            eta: vec![-1.0, 0.0, 1.0],
+            // cost[j * 3 + i] at (rho[i], eta[j])
+            cost: vec![5.0, 4.0, 3.0, 6.0, 1.0, f64::NAN, 7.0, 2.0, 0.5],
+            fits: vec![None; 9],
+            minima: vec![(2, 2)],
+            with_phase: false,
+        };
+        let at = |rho, eta| nearest_node(&land, &ExponentStart { rho, eta });
+        assert_eq!(at(Some(1.4), Some(-0.6)), Some((1, 0)));
+        assert_eq!(at(Some(-3.0), Some(9.0)), Some((0, 2)));
+        // rho 1 given: along eta the lowest cost at i = 1 is 1.0 (j = 1)
+        assert_eq!(at(Some(0.9), None), Some((1, 1)));
+        // eta 0 given: along rho at j = 1, rho = 2 is unsolved, rho = 1 wins
+        assert_eq!(at(None, Some(0.2)), Some((1, 1)));
+        // the nearest node unsolved: no start
+        assert_eq!(at(Some(2.0), Some(0.0)), None);
+        assert_eq!(at(None, None), None);
+        assert_eq!(at(Some(f64::NAN), Some(0.0)), None);
+    }
     use crate::identification::Curve;
     use crate::SweepDirection;
 

@@ -657,6 +657,23 @@ pub struct Inspection {
     pub recommendation: Recommendation,
 }
 
+impl Inspection {
+    /// The exponents the laws determined (not at the end of the search
+    /// range), as a start of the fit ([`super::FitPlan::start_exponents`],
+    /// `nlsdof fit --from-inspect`).
+    pub fn exponent_start(&self) -> super::ExponentStart {
+        let pick = |f: &Option<LawFit>| {
+            f.as_ref()
+                .filter(|f| !f.exponent_at_bound && f.exponent.is_finite())
+                .map(|f| f.exponent)
+        };
+        super::ExponentStart {
+            rho: pick(&self.stiffness.fit),
+            eta: pick(&self.damping.fit),
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Entry point
 // ---------------------------------------------------------------------------

@@ -28,6 +28,7 @@ use super::equation_error::{
     solve_magnitude_to, solve_phase, EquationErrorError, EquationErrorFit, PhaseConvention,
     Prepared, Terms,
 };
+use crate::cancel::Cancel;
 use rayon::prelude::*;
 
 /// χ²₁ 95 % quantile.
@@ -108,6 +109,9 @@ pub enum LandscapeError {
     },
     #[error("no node of the exponent landscape could be solved: {0}")]
     NothingSolved(EquationErrorError),
+    /// Cancelled ([`landscape_cancellable`]).
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }
 
 /// Computes the landscape over `rho × eta`.
@@ -130,6 +134,21 @@ pub fn landscape_with_progress(
     eta: Axis,
     phase: LandscapePhase,
     row_done: &(dyn Fn() + Sync),
+) -> Result<Landscape, LandscapeError> {
+    landscape_cancellable(prep, terms, rho, eta, phase, row_done, Cancel::NEVER)
+}
+
+/// As [`landscape_with_progress`], polling `cancel` before every node:
+/// once it is set the remaining nodes are skipped and the result is
+/// [`LandscapeError::Interrupted`] ([`crate::cancel`]).
+pub fn landscape_cancellable(
+    prep: &Prepared,
+    terms: Terms,
+    rho: Axis,
+    eta: Axis,
+    phase: LandscapePhase,
+    row_done: &(dyn Fn() + Sync),
+    cancel: Cancel,
 ) -> Result<Landscape, LandscapeError> {
     if rho.n == 0 || eta.n == 0 {
         return Err(LandscapeError::EmptyGrid {
@@ -160,6 +179,10 @@ pub fn landscape_with_progress(
                 let row: Vec<_> = rv
                     .iter()
                     .map(|&r| match phase {
+                        // (a placeholder: the landscape is not returned)
+                        _ if cancel.is_cancelled() => {
+                            Err(EquationErrorError::NotConverged { rho: r, eta: e })
+                        }
                         LandscapePhase::Ignore => {
                             // LM tolerances of a map: measured on 5 × 200 noisy
                             // points, the costs agree with those solved to
@@ -197,6 +220,7 @@ pub fn landscape_with_progress(
             .collect()
     };
     let mut rows = solve_rows(true, true);
+    cancel.check()?;
     // the chain can carry a degenerate node (ρ = 0: β a copy of α) along a
     // whole row; when no node is left, every node is solved on its own
     // (measured: a blind set whose every node with η > −0.1 was degenerate
@@ -210,6 +234,7 @@ pub fn landscape_with_progress(
     };
     if matches!(phase, LandscapePhase::Ignore) && rows.iter().flatten().all(degenerate) {
         rows = solve_rows(false, false);
+        cancel.check()?;
     }
     let mut cost = Vec::with_capacity(nr * ev.len());
     let mut fits = Vec::with_capacity(nr * ev.len());

@@ -51,6 +51,10 @@ pub struct LmOptions {
     /// `100 · decrement_tol · s²` in all (a crawl along a ridge of the cost
     /// whose floor is flat to the resolution of the data). 0 (default) = off.
     pub decrement_tol: f64,
+    /// Polled before every evaluation: once set, [`minimise`] stops at
+    /// once (termination [`Termination::MaxIterations`]; the callers turn
+    /// that into their *interrupted* error, [`crate::cancel`]).
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl Default for LmOptions {
@@ -63,6 +67,7 @@ impl Default for LmOptions {
             gtol: 1e-12,
             cost_floor: 0.0,
             decrement_tol: 0.0,
+            cancel: crate::cancel::Cancel::NEVER,
         }
     }
 }
@@ -208,6 +213,11 @@ pub fn minimise<P: LeastSquares + ?Sized>(
     let n = problem.n_params();
     let clamp = |v: f64, k: usize| v.max(lo[k]).min(hi[k]);
     let mut u: Vec<f64> = (0..n).map(|k| clamp(u0[k], k)).collect();
+    if opts.cancel.is_cancelled() {
+        // cancelled before the first evaluation: no start evaluated (the
+        // callers report the interruption, `LmOptions::cancel`)
+        return Err(StartNotEvaluable { start: u });
+    }
     let (mut r, mut j) = problem
         .residuals_and_jacobian(&u)
         .ok_or_else(|| StartNotEvaluable { start: u.clone() })?;
@@ -231,7 +241,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
         if cost <= opts.cost_floor {
             return done(u, cost, iterations, evaluations, Termination::ZeroResidual);
         }
-        if iterations >= opts.max_iterations {
+        if iterations >= opts.max_iterations || opts.cancel.is_cancelled() {
             return done(u, cost, iterations, evaluations, Termination::MaxIterations);
         }
         iterations += 1;
@@ -318,7 +328,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 lin += v * v;
             }
             let pred = cost - lin;
-            if evaluations >= opts.max_evaluations {
+            if evaluations >= opts.max_evaluations || opts.cancel.is_cancelled() {
                 return done(u, cost, iterations, evaluations, Termination::MaxIterations);
             }
             evaluations += 1;

@@ -22,6 +22,7 @@
 //! with acceleration input only ratios to m are identifiable. The model
 //! sees the input `gain · γ` (a point on a continuous structure).
 
+pub mod compare;
 pub mod data;
 pub mod decay;
 pub mod equation_error;
@@ -46,8 +47,9 @@ pub mod uncertainty;
 pub use data::{Curve, DataError, Dataset, Record};
 pub use equation_error::{EquationErrorFit, PhaseConvention};
 pub use identify::{
-    identify, Adequacy, CurveReport, FitPlan, GainChoice, Identification, IdentifyError,
-    IdentifyProgress, JumpChoice, PhaseChoice, ReadingChoice, SignChoice, Weighting,
+    identify, nearest_node, Adequacy, CurveReport, ExponentStart, FitPlan, GainChoice,
+    Identification, IdentifyError, IdentifyProgress, JumpChoice, PhaseChoice, ReadingChoice,
+    SignChoice, Weighting,
 };
 pub use landscape::{Axis, Landscape};
 pub use levenberg_marquardt::{LmOptions, Termination};
@@ -71,6 +73,9 @@ pub enum FitError {
     Solve(#[from] SolveError),
     #[error("no start point of the {model} fit could be evaluated (every model sweep failed)")]
     NoStartEvaluable { model: ModelKind },
+    /// Cancelled through `opts.lm.cancel` ([`crate::cancel`]).
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }
 
 /// Options of [`fit`].
@@ -335,6 +340,8 @@ fn fit_impl(
             progress,
         ),
     };
+    // a cancelled search returns no result (not its last iterates)
+    lm.cancel.check()?;
     let best = found
         .first()
         .ok_or(FitError::NoStartEvaluable { model: spec.kind })?;

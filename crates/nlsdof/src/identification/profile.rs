@@ -41,6 +41,49 @@ pub struct OutputErrorProfile {
     pub points: Vec<(f64, f64)>,
     /// Local fits run.
     pub fits: usize,
+    /// The value the profile started from (the reported optimum; the
+    /// first refit moves it to `estimate`).
+    pub start: f64,
+    /// The lowest `(P − P*)/σ̂²` met on the walk, before the statistic is
+    /// clipped at 0 (`points`), and where: `(estimate, 0)` when no held fit
+    /// went below `P*`.
+    pub lowest: (f64, f64),
+}
+
+impl OutputErrorProfile {
+    /// Why this interval must not be reported as the interval of the
+    /// estimate, `None` when it may. An interval that leaves out its own
+    /// estimate is not an interval of it. It happens when the estimate is
+    /// not at the minimum of the objective along the parameter (a fit that
+    /// stopped on a flat ridge, or at its iteration limit):
+    ///
+    /// * a held fit lowered the objective below `P*` by at least
+    ///   χ²₁(0.95) σ̂²: against that lower minimum the estimate itself would
+    ///   be outside its 95 % region;
+    /// * the first refit moved the exponent away from the reported optimum
+    ///   (`start`), and the interval around the refit leaves `start` out.
+    pub fn refusal(&self) -> Option<String> {
+        let name = self.parameter.info().name;
+        let show = |v: Option<f64>| v.map_or("open".to_string(), |v| format!("{v:.4}"));
+        if self.lowest.1 <= -CHI2_1_95 {
+            return Some(format!(
+                "a refit with {name} held at {:.4} lowers the objective by {:.3} sigma^2 below its value at the optimum {:.4} (more than chi2_1(0.95) = 3.84): the fit did not reach the minimum of its objective along {name}, so no profile interval of its estimate exists",
+                self.lowest.0, -self.lowest.1, self.estimate
+            ));
+        }
+        let inside = self.lower.map_or(true, |l| l <= self.start)
+            && self.upper.map_or(true, |u| self.start <= u);
+        if !inside {
+            return Some(format!(
+                "the refit from the reported optimum moved {name} from {:.4} to {:.4} and the profile around it, [{}, {}], leaves the reported estimate out: the fit did not reach the minimum of its objective along {name}",
+                self.start,
+                self.estimate,
+                show(self.lower),
+                show(self.upper)
+            ));
+        }
+        None
+    }
 }
 
 /// Why a profile could not be computed.
@@ -56,6 +99,9 @@ pub enum ProfileError {
     BadStep { step: f64 },
     #[error(transparent)]
     Fit(#[from] FitError),
+    /// Cancelled ([`output_error_profile_with`]): no interval.
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }
 
 /// A step for [`output_error_profile`]: half the linearised standard error
@@ -103,6 +149,34 @@ pub fn output_error_profile(
     step: f64,
     max_steps: usize,
 ) -> Result<OutputErrorProfile, ProfileError> {
+    output_error_profile_with(
+        data,
+        spec,
+        start,
+        parameter,
+        step,
+        max_steps,
+        crate::cancel::Cancel::NEVER,
+        &|_, _| {},
+    )
+}
+
+/// As [`output_error_profile`], polling `cancel` in every local fit
+/// ([`crate::cancel`]: a cancelled profile returns
+/// [`ProfileError::Interrupted`], never a partial interval) and calling
+/// `progress(fits_done, most_fits)` after each local fit (`most_fits =
+/// 1 + 2 max_steps`: a side ends early when it crosses the threshold).
+#[allow(clippy::too_many_arguments)]
+pub fn output_error_profile_with(
+    data: &Dataset,
+    spec: &FitSpec,
+    start: &super::Parameters,
+    parameter: Parameter,
+    step: f64,
+    max_steps: usize,
+    cancel: crate::cancel::Cancel,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<OutputErrorProfile, ProfileError> {
     let name = parameter.info().name;
     if !matches!(parameter, Parameter::Rho | Parameter::Eta) {
         return Err(ProfileError::NotAnExponent { name });
@@ -114,13 +188,16 @@ pub fn output_error_profile(
     if !(step.is_finite() && step > 0.0) {
         return Err(ProfileError::BadStep { step });
     }
-    let opts = FitOptions {
+    let mut opts = FitOptions {
         starts: 1,
         ..FitOptions::default()
     };
+    opts.lm.cancel = cancel;
+    let most = 1 + 2 * max_steps;
     let mut free = spec.clone();
     free.start = *start;
     let best = fit(data, &free, &opts, &|| {})?;
+    progress(1, most);
     let (p_star, m) = objective(&best, data, &free);
     let p = best.n_free;
     if m <= p {
@@ -133,6 +210,7 @@ pub fn output_error_profile(
     let estimate = best.theta[j];
     let (lo_bound, hi_bound) = spec.bounds[j];
     let mut points = vec![(estimate, 0.0)];
+    let mut lowest = (estimate, 0.0f64);
     let mut fits = 1;
     let mut ends = [None, None];
     for (side, dir) in [(0usize, -1.0f64), (1, 1.0)] {
@@ -152,9 +230,14 @@ pub fn output_error_profile(
                 Err(_) => break,
             };
             fits += 1;
+            progress(fits, most);
             theta = r.theta;
             let (pv, _) = objective(&r, data, &held);
-            let stat = ((pv - p_star) / sigma2).max(0.0);
+            let raw = (pv - p_star) / sigma2;
+            if raw < lowest.1 {
+                lowest = (v, raw);
+            }
+            let stat = raw.max(0.0);
             points.push((v, stat));
             if stat >= CHI2_1_95 {
                 // √stat is linear in v for a quadratic profile
@@ -167,6 +250,7 @@ pub fn output_error_profile(
             prev = (v, stat);
         }
     }
+    cancel.check()?;
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
     Ok(OutputErrorProfile {
         parameter,
@@ -175,6 +259,8 @@ pub fn output_error_profile(
         upper: ends[1],
         points,
         fits,
+        start: start[j],
+        lowest,
     })
 }
 

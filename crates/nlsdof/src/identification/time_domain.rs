@@ -284,6 +284,9 @@ pub enum TimeFitError {
         value: f64,
         reason: &'static str,
     },
+    /// Cancelled through `opts.lm.cancel` ([`crate::cancel`]): no result.
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }
 
 /// A half-open sample range `[start, end)`, 0-based.
@@ -495,7 +498,7 @@ fn power_terms(s: f64, mu: f64, want_log: bool) -> (f64, f64, f64) {
 /// record sample and, with `jac = Some`, the rows `∂ŷ_k/∂θ` (all
 /// [`N_TIME_PARAMS`] columns); `vs = Some` gets the velocity at every
 /// sample. `logs = (ρ, η)` columns needed. Returns `false` on a non-finite
-/// state.
+/// state. ([`trajectory`], then [`sensitivities_split`].)
 #[allow(clippy::too_many_arguments)]
 fn run(
     th: &[f64; N_TIME_PARAMS],
@@ -503,11 +506,87 @@ fn run(
     fs: f64,
     disc: &Discretisation,
     ys: &mut Vec<f64>,
-    mut jac: Option<&mut Vec<[f64; N_TIME_PARAMS]>>,
+    jac: Option<&mut Vec<[f64; N_TIME_PARAMS]>>,
     logs: (bool, bool),
-    mut vs: Option<&mut Vec<f64>>,
+    vs: Option<&mut Vec<f64>>,
 ) -> bool {
-    const P: usize = N_TIME_PARAMS;
+    let Some(jac) = jac else {
+        return trajectory(th, fine, fs, disc, logs, ys, vs, None);
+    };
+    jac.clear();
+    let mut stages = Vec::new();
+    if !trajectory(th, fine, fs, disc, logs, ys, vs, Some(&mut stages)) {
+        return false;
+    }
+    let cols: Vec<usize> = (0..N_TIME_PARAMS).collect();
+    let flat = sensitivities_split(th, fine, fs, disc, logs, &stages, &cols);
+    jac.extend(
+        flat.chunks_exact(N_TIME_PARAMS)
+            .map(|r| <[f64; N_TIME_PARAMS]>::try_from(r).expect("row length")),
+    );
+    true
+}
+
+/// One RK4 stage of a simulated trajectory, recorded by [`trajectory`] for
+/// [`sensitivities`]: the stage state and the power-law factors `|x|^ρ`,
+/// `|v|^η` with `ln|x|`, `ln|v|` (as [`power_parts`] returns them).
+#[derive(Debug, Clone, Copy, Default)]
+struct Stage {
+    x: f64,
+    v: f64,
+    px: f64,
+    pv: f64,
+    lnx: f64,
+    lnv: f64,
+}
+
+/// `|s|^μ` and `ln|s|` (μ ≥ 0) for the simulation: `|s|^μ = exp(μ ln|s|)`,
+/// one logarithm shared by the power and the exponent's sensitivity
+/// (`s|s|^μ ln|s|`); exact products for μ = 0, 1, 2 (the log then only
+/// when `want_log`). At s = 0: `(1 if μ = 0 else 0, 0)`, so that
+/// `s|s|^μ = 0`, its slope `(μ+1)|s|^μ` and `s|s|^μ ln|s| = 0` (as
+/// [`power_terms`]).
+#[inline(always)]
+fn power_parts(s: f64, mu: f64, want_log: bool) -> (f64, f64) {
+    if s == 0.0 {
+        return (if mu == 0.0 { 1.0 } else { 0.0 }, 0.0);
+    }
+    let a = s.abs();
+    let special = if mu == 2.0 {
+        Some(a * a)
+    } else if mu == 1.0 {
+        Some(a)
+    } else if mu == 0.0 {
+        Some(1.0)
+    } else {
+        None
+    };
+    match special {
+        Some(p) => (p, if want_log { a.ln() } else { 0.0 }),
+        None => {
+            let l = a.ln();
+            ((mu * l).exp(), l)
+        }
+    }
+}
+
+/// The state recurrence of [`run`] (RK4 on the fine input): ŷ at every
+/// sample into `ys`, the velocity into `vs`, every stage into `stages`
+/// (`1 + 4 · steps` entries: the first stage of each step, then its
+/// stages 2–4; the last entry is the first stage after the last step).
+/// `logs`: record `ln|x|`, `ln|v|` for the exponents' sensitivities.
+/// `false` on a non-finite state.
+#[allow(clippy::too_many_arguments)]
+fn trajectory(
+    th: &[f64; N_TIME_PARAMS],
+    fine: &[f64],
+    fs: f64,
+    disc: &Discretisation,
+    logs: (bool, bool),
+    ys: &mut Vec<f64>,
+    mut vs: Option<&mut Vec<f64>>,
+    mut stages: Option<&mut Vec<Stage>>,
+) -> bool {
     let (alpha, delta, beta, rho, kappa, eta) =
         (th[ALPHA], th[DELTA], th[BETA], th[RHO], th[KAPPA], th[ETA]);
     let (g, bu, by) = (th[GAIN], th[INPUT_OFFSET], th[OUTPUT_OFFSET]);
@@ -516,68 +595,48 @@ fn run(
     let h = 1.0 / (disc.substeps as f64 * fs);
     let hh = 0.5 * h;
     let h6 = h * (1.0 / 6.0);
-    let sens = jac.is_some();
-    ys.clear();
-    if let Some(j) = jac.as_deref_mut() {
-        j.clear();
-    }
-    let (mut x, mut v) = (th[X0], th[V0]);
-    let mut sx = [0.0; P];
-    let mut sv = [0.0; P];
-    sx[X0] = 1.0;
-    sv[V0] = 1.0;
     let has_s = beta != 0.0 || logs.0;
     let has_d = kappa != 0.0 || logs.1;
-    // acceleration and its sensitivity at one stage
-    let accel = |x: f64, v: f64, sx: &[f64; P], sv: &[f64; P], ut: f64, da: &mut [f64; P]| {
-        let (fx, dfx, lx) = if has_s {
-            power_terms(x, rho, logs.0)
+    // acceleration at one stage, and the stage's record
+    let accel = |x: f64, v: f64, ut: f64| {
+        let (px, lnx) = if has_s {
+            power_parts(x, rho, logs.0)
         } else {
-            (0.0, 0.0, 0.0)
+            (0.0, 0.0)
         };
-        let (fv, dfv, lv) = if has_d {
-            power_terms(v, eta, logs.1)
+        let (pv, lnv) = if has_d {
+            power_parts(v, eta, logs.1)
         } else {
-            (0.0, 0.0, 0.0)
+            (0.0, 0.0)
         };
+        let fx = if has_s { x * px } else { 0.0 };
+        let fv = if has_d { v * pv } else { 0.0 };
         let a = g * (ut + bu) - ((alpha * x + beta * fx) + (delta * v + kappa * fv));
-        if sens {
-            let ax = -alpha - beta * dfx;
-            let av = -delta - kappa * dfv;
-            for p in 0..P {
-                da[p] = ax * sx[p] + av * sv[p];
-            }
-            da[ALPHA] -= x;
-            da[DELTA] -= v;
-            da[BETA] -= fx;
-            da[RHO] -= beta * lx;
-            da[KAPPA] -= fv;
-            da[ETA] -= kappa * lv;
-            da[GAIN] += ut + bu;
-            da[INPUT_OFFSET] += g;
-        }
-        a
+        (
+            a,
+            Stage {
+                x,
+                v,
+                px,
+                pv,
+                lnx,
+                lnv,
+            },
+        )
     };
-    let emit = |x: f64, sx: &[f64; P], ys: &mut Vec<f64>, jac: &mut Option<&mut Vec<[f64; P]>>| {
-        ys.push(x + by);
-        if let Some(j) = jac.as_deref_mut() {
-            let mut row = *sx;
-            row[OUTPUT_OFFSET] += 1.0;
-            j.push(row);
-        }
-    };
-    emit(x, &sx, ys, &mut jac);
+    ys.clear();
+    let (mut x, mut v) = (th[X0], th[V0]);
+    ys.push(x + by);
     if let Some(w) = vs.as_deref_mut() {
         w.clear();
         w.push(v);
     }
-    let mut da1 = [0.0; P];
-    let mut da2 = [0.0; P];
-    let mut da3 = [0.0; P];
-    let mut da4 = [0.0; P];
-    let mut s2x = [0.0; P];
-    let mut s2v = [0.0; P];
-    let mut a1 = accel(x, v, &sx, &sv, fine[0], &mut da1);
+    let (mut a1, st1) = accel(x, v, fine[0]);
+    if let Some(s) = stages.as_deref_mut() {
+        s.clear();
+        s.reserve(2 * fine.len() + 1);
+        s.push(st1);
+    }
     let mut i = 0;
     let n_fine = fine.len();
     while i + 2 < n_fine {
@@ -593,58 +652,234 @@ fn run(
         );
         let x2 = x + hh * v;
         let v2 = v + hh * a1;
-        if sens {
-            for p in 0..P {
-                s2x[p] = sx[p] + hh * sv[p];
-                s2v[p] = sv[p] + hh * da1[p];
-            }
-        }
-        let a2 = accel(x2, v2, &s2x, &s2v, um, &mut da2);
+        let (a2, st2) = accel(x2, v2, um);
         let x3 = x + hh * v2;
         let v3 = v + hh * a2;
-        let mut s3x = [0.0; P];
-        let mut s3v = [0.0; P];
-        if sens {
-            for p in 0..P {
-                s3x[p] = sx[p] + hh * s2v[p];
-                s3v[p] = sv[p] + hh * da2[p];
-            }
-        }
-        let a3 = accel(x3, v3, &s3x, &s3v, um, &mut da3);
+        let (a3, st3) = accel(x3, v3, um);
         let x4 = x + h * v3;
         let v4 = v + h * a3;
-        let mut s4x = [0.0; P];
-        let mut s4v = [0.0; P];
-        if sens {
-            for p in 0..P {
-                s4x[p] = sx[p] + h * s3v[p];
-                s4v[p] = sv[p] + h * da3[p];
-            }
-        }
-        let a4 = accel(x4, v4, &s4x, &s4v, u1, &mut da4);
+        let (a4, st4) = accel(x4, v4, u1);
         let xn = x + h6 * (v + 2.0 * (v2 + v3) + v4);
         let vn = v + h6 * (a1 + 2.0 * (a2 + a3) + a4);
-        if sens {
-            for p in 0..P {
-                sx[p] += h6 * (sv[p] + 2.0 * (s2v[p] + s3v[p]) + s4v[p]);
-                sv[p] += h6 * (da1[p] + 2.0 * (da2[p] + da3[p]) + da4[p]);
-            }
-        }
         x = xn;
         v = vn;
         if !(x.is_finite() && v.is_finite()) {
             return false;
         }
-        a1 = accel(x, v, &sx, &sv, fine[i + 2], &mut da1);
+        let (na1, st1) = accel(x, v, fine[i + 2]);
+        a1 = na1;
+        if let Some(s) = stages.as_deref_mut() {
+            s.extend_from_slice(&[st2, st3, st4, st1]);
+        }
         i += 2;
         if boundary {
-            emit(x, &sx, ys, &mut jac);
+            ys.push(x + by);
             if let Some(w) = vs.as_deref_mut() {
                 w.push(v);
             }
         }
     }
     true
+}
+
+/// The forward sensitivities (module docs) of a trajectory recorded by
+/// [`trajectory`] with the same θ, input, discretisation and `logs`, for
+/// the entries `cols` of θ: `out` gets one row of `cols.len()` values
+/// `∂ŷ_k/∂θ_c` per sample. Each column's recurrence involves only that
+/// column, so any grouping of the columns gives the same values (those of
+/// the joint recurrence: the same operations in the same order).
+#[allow(clippy::too_many_arguments)]
+fn sensitivities(
+    th: &[f64; N_TIME_PARAMS],
+    fine: &[f64],
+    fs: f64,
+    disc: &Discretisation,
+    logs: (bool, bool),
+    stages: &[Stage],
+    cols: &[usize],
+    out: &mut Vec<f64>,
+) {
+    // a fixed width (the loops unrolled and vectorised), padded with
+    // columns that stay 0 and are not written
+    match cols.len() {
+        0..=2 => sensitivities_w::<2>(th, fine, fs, disc, logs, stages, cols, out),
+        3..=4 => sensitivities_w::<4>(th, fine, fs, disc, logs, stages, cols, out),
+        5..=6 => sensitivities_w::<6>(th, fine, fs, disc, logs, stages, cols, out),
+        7..=8 => sensitivities_w::<8>(th, fine, fs, disc, logs, stages, cols, out),
+        _ => sensitivities_w::<N_TIME_PARAMS>(th, fine, fs, disc, logs, stages, cols, out),
+    }
+}
+
+/// [`sensitivities`] with `W >= cols.len()` lanes.
+#[allow(clippy::too_many_arguments)]
+fn sensitivities_w<const W: usize>(
+    th: &[f64; N_TIME_PARAMS],
+    fine: &[f64],
+    fs: f64,
+    disc: &Discretisation,
+    logs: (bool, bool),
+    stages: &[Stage],
+    cols: &[usize],
+    out: &mut Vec<f64>,
+) {
+    const P: usize = N_TIME_PARAMS;
+    let c = cols.len();
+    assert!(c <= W && W <= P, "at most {W} columns");
+    let (alpha, delta, beta, rho, kappa, eta) =
+        (th[ALPHA], th[DELTA], th[BETA], th[RHO], th[KAPPA], th[ETA]);
+    let (g, bu) = (th[GAIN], th[INPUT_OFFSET]);
+    let per_sample = 2 * disc.substeps;
+    let zoh = disc.interpolation == InputInterpolation::Zoh;
+    let h = 1.0 / (disc.substeps as f64 * fs);
+    let hh = 0.5 * h;
+    let h6 = h * (1.0 / 6.0);
+    let has_s = beta != 0.0 || logs.0;
+    let has_d = kappa != 0.0 || logs.1;
+    // padding lanes read the forcing slot P, always 0
+    let mut col = [P; W];
+    let mut sx = [0.0; W];
+    let mut sv = [0.0; W];
+    for (k, &p) in cols.iter().enumerate() {
+        assert!(p < P, "column {p}");
+        col[k] = p;
+        sx[k] = if p == X0 { 1.0 } else { 0.0 };
+        sv[k] = if p == V0 { 1.0 } else { 0.0 };
+    }
+    // ∂a/∂θ at one stage: f_s · (S_x, S_v) + f_θ
+    let slope = |s: &Stage, ut: f64, sx: &[f64; W], sv: &[f64; W], da: &mut [f64; W]| {
+        let (fx, dfx, lx) = if has_s {
+            let fx = s.x * s.px;
+            (
+                fx,
+                (rho + 1.0) * s.px,
+                if logs.0 { fx * s.lnx } else { 0.0 },
+            )
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+        let (fv, dfv, lv) = if has_d {
+            let fv = s.v * s.pv;
+            (
+                fv,
+                (eta + 1.0) * s.pv,
+                if logs.1 { fv * s.lnv } else { 0.0 },
+            )
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+        let ax = -alpha - beta * dfx;
+        let av = -delta - kappa * dfv;
+        let mut f = [0.0; P + 1];
+        f[ALPHA] = -s.x;
+        f[DELTA] = -s.v;
+        f[BETA] = -fx;
+        f[RHO] = -(beta * lx);
+        f[KAPPA] = -fv;
+        f[ETA] = -(kappa * lv);
+        f[GAIN] = ut + bu;
+        f[INPUT_OFFSET] = g;
+        let mut fk = [0.0; W];
+        for k in 0..W {
+            fk[k] = f[col[k]];
+        }
+        for k in 0..W {
+            da[k] = ax * sx[k] + av * sv[k] + fk[k];
+        }
+    };
+    let emit = |sx: &[f64; W], out: &mut Vec<f64>| {
+        for k in 0..c {
+            out.push(if col[k] == OUTPUT_OFFSET {
+                sx[k] + 1.0
+            } else {
+                sx[k]
+            });
+        }
+    };
+    out.clear();
+    out.reserve(c * (fine.len() / per_sample + 1));
+    emit(&sx, out);
+    let mut da1 = [0.0; W];
+    let mut da2 = [0.0; W];
+    let mut da3 = [0.0; W];
+    let mut da4 = [0.0; W];
+    let (mut s2x, mut s2v) = ([0.0; W], [0.0; W]);
+    let (mut s3x, mut s3v) = ([0.0; W], [0.0; W]);
+    let (mut s4x, mut s4v) = ([0.0; W], [0.0; W]);
+    slope(&stages[0], fine[0], &sx, &sv, &mut da1);
+    let mut i = 0;
+    for st in stages[1..].chunks_exact(4) {
+        let boundary = (i + 2) % per_sample == 0;
+        let (um, u1) = (
+            fine[i + 1],
+            if zoh && boundary {
+                fine[i + 1]
+            } else {
+                fine[i + 2]
+            },
+        );
+        for k in 0..W {
+            s2x[k] = sx[k] + hh * sv[k];
+            s2v[k] = sv[k] + hh * da1[k];
+        }
+        slope(&st[0], um, &s2x, &s2v, &mut da2);
+        for k in 0..W {
+            s3x[k] = sx[k] + hh * s2v[k];
+            s3v[k] = sv[k] + hh * da2[k];
+        }
+        slope(&st[1], um, &s3x, &s3v, &mut da3);
+        for k in 0..W {
+            s4x[k] = sx[k] + h * s3v[k];
+            s4v[k] = sv[k] + h * da3[k];
+        }
+        slope(&st[2], u1, &s4x, &s4v, &mut da4);
+        for k in 0..W {
+            sx[k] += h6 * (sv[k] + 2.0 * (s2v[k] + s3v[k]) + s4v[k]);
+            sv[k] += h6 * (da1[k] + 2.0 * (da2[k] + da3[k]) + da4[k]);
+        }
+        slope(&st[3], fine[i + 2], &sx, &sv, &mut da1);
+        i += 2;
+        if boundary {
+            emit(&sx, out);
+        }
+    }
+}
+
+/// Steps (RK4 stages / 4) from which [`sensitivities_split`] shares the
+/// columns between two threads.
+const SPLIT_MIN_STAGES: usize = 4096;
+
+/// [`sensitivities`] of `cols` into a row-major matrix (one row of
+/// `cols.len()` per sample), the columns shared between two rayon tasks on
+/// long records (the same values: the columns are independent).
+#[allow(clippy::too_many_arguments)]
+fn sensitivities_split(
+    th: &[f64; N_TIME_PARAMS],
+    fine: &[f64],
+    fs: f64,
+    disc: &Discretisation,
+    logs: (bool, bool),
+    stages: &[Stage],
+    cols: &[usize],
+) -> Vec<f64> {
+    let c = cols.len();
+    let mut out = Vec::new();
+    if c < 4 || stages.len() < SPLIT_MIN_STAGES {
+        sensitivities(th, fine, fs, disc, logs, stages, cols, &mut out);
+        return out;
+    }
+    let (left, right) = cols.split_at(c / 2);
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    rayon::join(
+        || sensitivities(th, fine, fs, disc, logs, stages, left, &mut a),
+        || sensitivities(th, fine, fs, disc, logs, stages, right, &mut b),
+    );
+    let (nl, nr) = (left.len(), right.len());
+    out.reserve(a.len() + b.len());
+    for (ra, rb) in a.chunks_exact(nl).zip(b.chunks_exact(nr)) {
+        out.extend_from_slice(ra);
+        out.extend_from_slice(rb);
+    }
+    out
 }
 
 /// ŷ of a model on a range's input from an initial state (the prediction of
@@ -765,6 +1000,19 @@ struct OutputError<'a> {
     free: &'a [usize],
     scale: Vec<f64>,
     logs: (bool, bool),
+    /// The trajectory of the last [`LeastSquares::residuals`] call: LM
+    /// asks for the Jacobian at the trial point it has just accepted, whose
+    /// trajectory (with its powers and logs) is then reused as it is.
+    last: std::sync::Mutex<LastTrajectory>,
+}
+
+/// See [`OutputError::last`].
+#[derive(Default)]
+struct LastTrajectory {
+    /// The z of the trajectory (empty: none).
+    z: Vec<f64>,
+    ys: Vec<f64>,
+    stages: Vec<Stage>,
 }
 
 impl OutputError<'_> {
@@ -783,19 +1031,24 @@ impl LeastSquares for OutputError<'_> {
     }
     fn residuals(&self, z: &[f64]) -> Option<Vec<f64>> {
         let th = self.theta(z);
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        let last = &mut *last;
+        last.z.clear();
         let mut ys = Vec::with_capacity(self.y.len());
-        if !run(
+        if !trajectory(
             &th,
             self.fine,
             self.fs,
             &self.disc,
+            self.logs,
             &mut ys,
             None,
-            (false, false),
-            None,
+            Some(&mut last.stages),
         ) {
             return None;
         }
+        last.z.extend_from_slice(z);
+        last.ys.clone_from(&ys);
         for (a, b) in ys.iter_mut().zip(self.y) {
             *a -= b;
         }
@@ -803,28 +1056,49 @@ impl LeastSquares for OutputError<'_> {
     }
     fn residuals_and_jacobian(&self, z: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let th = self.theta(z);
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        let last = &mut *last;
+        let same = !last.z.is_empty()
+            && last.z.len() == z.len()
+            && last
+                .z
+                .iter()
+                .zip(z)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
         let mut ys = Vec::with_capacity(self.y.len());
-        let mut jac = Vec::with_capacity(self.y.len());
-        if !run(
+        if same {
+            ys.clone_from(&last.ys);
+        } else {
+            last.z.clear();
+            if !trajectory(
+                &th,
+                self.fine,
+                self.fs,
+                &self.disc,
+                self.logs,
+                &mut ys,
+                None,
+                Some(&mut last.stages),
+            ) {
+                return None;
+            }
+        }
+        let flat = sensitivities_split(
             &th,
             self.fine,
             self.fs,
             &self.disc,
-            &mut ys,
-            Some(&mut jac),
             self.logs,
-            None,
-        ) {
-            return None;
-        }
+            &last.stages,
+            self.free,
+        );
         for (a, b) in ys.iter_mut().zip(self.y) {
             *a -= b;
         }
-        let nf = self.free.len();
-        let mut j = Vec::with_capacity(ys.len() * nf);
-        for row in &jac {
-            for (k, &p) in self.free.iter().enumerate() {
-                j.push(row[p] * self.scale[k]);
+        let mut j = flat;
+        for row in j.chunks_exact_mut(self.free.len()) {
+            for (v, s) in row.iter_mut().zip(&self.scale) {
+                *v *= s;
             }
         }
         if j.iter().any(|v| !v.is_finite()) {
@@ -918,6 +1192,7 @@ impl Default for TimeFitOptions {
                 gtol: 1e-10,
                 cost_floor: 0.0,
                 decrement_tol: 0.0,
+                cancel: crate::cancel::Cancel::NEVER,
             },
             starts: 1,
             seed: 1,
@@ -1130,6 +1405,7 @@ fn local_fit(
         free,
         scale: scale.clone(),
         logs: (free.contains(&RHO), free.contains(&ETA)),
+        last: Default::default(),
     };
     let z0: Vec<f64> = free
         .iter()
@@ -1144,7 +1420,10 @@ fn local_fit(
             (l / s, h / s)
         })
         .unzip();
-    let r = minimise(&problem, &z0, &lo, &hi, lm).map_err(|_| TimeFitError::StartNotEvaluable)?;
+    let r = minimise(&problem, &z0, &lo, &hi, lm).map_err(|_| match lm.cancel.check() {
+        Err(i) => TimeFitError::Interrupted(i),
+        Ok(()) => TimeFitError::StartNotEvaluable,
+    })?;
     Ok(Local {
         theta: problem.theta(&r.u),
         cost: r.cost,
@@ -1260,6 +1539,7 @@ pub fn fit_time_domain(
     let spread = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut refits = 1;
     let integration = loop {
+        opts.lm.cancel.check()?;
         let yn = simulate(&best.theta, &fine, &disc).ok_or(TimeFitError::StartNotEvaluable)?;
         let d2 = disc.doubled();
         let e = simulate(&best.theta, &d2.fine(u), &d2)
@@ -1314,6 +1594,8 @@ pub fn fit_time_domain(
         .collect();
     let cost: f64 = r.iter().map(|v| v * v).sum();
     let uncertainty = uncertainty_of(&best.theta, &free, &j, &r);
+    // a cancelled fit (its LM runs stopped early) returns no result
+    opts.lm.cancel.check()?;
     Ok(TimeFit {
         kind,
         range,
@@ -1437,6 +1719,332 @@ mod tests {
             Err(TimeFitError::NonUniformSampling { index: 2, .. })
         ));
         assert!((uniform_fs(&[0.0, 0.1, 0.2, 0.3], 1e-3).unwrap() - 10.0).abs() < 1e-9);
+    }
+
+    /// The simulation with sensitivities as it was before [`trajectory`] and
+    /// [`sensitivities`] (one joint recurrence over all columns, `powf`):
+    /// the reference of the fast path. Simulation of θ on a fine input (`disc.fine`); `ys` gets ŷ at every
+    /// record sample and, with `jac = Some`, the rows `∂ŷ_k/∂θ` (all
+    /// [`N_TIME_PARAMS`] columns); `vs = Some` gets the velocity at every
+    /// sample. `logs = (ρ, η)` columns needed. Returns `false` on a non-finite
+    /// state.
+    #[allow(clippy::too_many_arguments)]
+    fn run_reference(
+        th: &[f64; N_TIME_PARAMS],
+        fine: &[f64],
+        fs: f64,
+        disc: &Discretisation,
+        ys: &mut Vec<f64>,
+        mut jac: Option<&mut Vec<[f64; N_TIME_PARAMS]>>,
+        logs: (bool, bool),
+        mut vs: Option<&mut Vec<f64>>,
+    ) -> bool {
+        const P: usize = N_TIME_PARAMS;
+        let (alpha, delta, beta, rho, kappa, eta) =
+            (th[ALPHA], th[DELTA], th[BETA], th[RHO], th[KAPPA], th[ETA]);
+        let (g, bu, by) = (th[GAIN], th[INPUT_OFFSET], th[OUTPUT_OFFSET]);
+        let per_sample = 2 * disc.substeps;
+        let zoh = disc.interpolation == InputInterpolation::Zoh;
+        let h = 1.0 / (disc.substeps as f64 * fs);
+        let hh = 0.5 * h;
+        let h6 = h * (1.0 / 6.0);
+        let sens = jac.is_some();
+        ys.clear();
+        if let Some(j) = jac.as_deref_mut() {
+            j.clear();
+        }
+        let (mut x, mut v) = (th[X0], th[V0]);
+        let mut sx = [0.0; P];
+        let mut sv = [0.0; P];
+        sx[X0] = 1.0;
+        sv[V0] = 1.0;
+        let has_s = beta != 0.0 || logs.0;
+        let has_d = kappa != 0.0 || logs.1;
+        // acceleration and its sensitivity at one stage
+        let accel = |x: f64, v: f64, sx: &[f64; P], sv: &[f64; P], ut: f64, da: &mut [f64; P]| {
+            let (fx, dfx, lx) = if has_s {
+                power_terms(x, rho, logs.0)
+            } else {
+                (0.0, 0.0, 0.0)
+            };
+            let (fv, dfv, lv) = if has_d {
+                power_terms(v, eta, logs.1)
+            } else {
+                (0.0, 0.0, 0.0)
+            };
+            let a = g * (ut + bu) - ((alpha * x + beta * fx) + (delta * v + kappa * fv));
+            if sens {
+                let ax = -alpha - beta * dfx;
+                let av = -delta - kappa * dfv;
+                for p in 0..P {
+                    da[p] = ax * sx[p] + av * sv[p];
+                }
+                da[ALPHA] -= x;
+                da[DELTA] -= v;
+                da[BETA] -= fx;
+                da[RHO] -= beta * lx;
+                da[KAPPA] -= fv;
+                da[ETA] -= kappa * lv;
+                da[GAIN] += ut + bu;
+                da[INPUT_OFFSET] += g;
+            }
+            a
+        };
+        let emit =
+            |x: f64, sx: &[f64; P], ys: &mut Vec<f64>, jac: &mut Option<&mut Vec<[f64; P]>>| {
+                ys.push(x + by);
+                if let Some(j) = jac.as_deref_mut() {
+                    let mut row = *sx;
+                    row[OUTPUT_OFFSET] += 1.0;
+                    j.push(row);
+                }
+            };
+        emit(x, &sx, ys, &mut jac);
+        if let Some(w) = vs.as_deref_mut() {
+            w.clear();
+            w.push(v);
+        }
+        let mut da1 = [0.0; P];
+        let mut da2 = [0.0; P];
+        let mut da3 = [0.0; P];
+        let mut da4 = [0.0; P];
+        let mut s2x = [0.0; P];
+        let mut s2v = [0.0; P];
+        let mut a1 = accel(x, v, &sx, &sv, fine[0], &mut da1);
+        let mut i = 0;
+        let n_fine = fine.len();
+        while i + 2 < n_fine {
+            let boundary = (i + 2) % per_sample == 0;
+            // a hold keeps u_k up to the end of its interval (the left limit)
+            let (um, u1) = (
+                fine[i + 1],
+                if zoh && boundary {
+                    fine[i + 1]
+                } else {
+                    fine[i + 2]
+                },
+            );
+            let x2 = x + hh * v;
+            let v2 = v + hh * a1;
+            if sens {
+                for p in 0..P {
+                    s2x[p] = sx[p] + hh * sv[p];
+                    s2v[p] = sv[p] + hh * da1[p];
+                }
+            }
+            let a2 = accel(x2, v2, &s2x, &s2v, um, &mut da2);
+            let x3 = x + hh * v2;
+            let v3 = v + hh * a2;
+            let mut s3x = [0.0; P];
+            let mut s3v = [0.0; P];
+            if sens {
+                for p in 0..P {
+                    s3x[p] = sx[p] + hh * s2v[p];
+                    s3v[p] = sv[p] + hh * da2[p];
+                }
+            }
+            let a3 = accel(x3, v3, &s3x, &s3v, um, &mut da3);
+            let x4 = x + h * v3;
+            let v4 = v + h * a3;
+            let mut s4x = [0.0; P];
+            let mut s4v = [0.0; P];
+            if sens {
+                for p in 0..P {
+                    s4x[p] = sx[p] + h * s3v[p];
+                    s4v[p] = sv[p] + h * da3[p];
+                }
+            }
+            let a4 = accel(x4, v4, &s4x, &s4v, u1, &mut da4);
+            let xn = x + h6 * (v + 2.0 * (v2 + v3) + v4);
+            let vn = v + h6 * (a1 + 2.0 * (a2 + a3) + a4);
+            if sens {
+                for p in 0..P {
+                    sx[p] += h6 * (sv[p] + 2.0 * (s2v[p] + s3v[p]) + s4v[p]);
+                    sv[p] += h6 * (da1[p] + 2.0 * (da2[p] + da3[p]) + da4[p]);
+                }
+            }
+            x = xn;
+            v = vn;
+            if !(x.is_finite() && v.is_finite()) {
+                return false;
+            }
+            a1 = accel(x, v, &sx, &sv, fine[i + 2], &mut da1);
+            i += 2;
+            if boundary {
+                emit(x, &sx, ys, &mut jac);
+                if let Some(w) = vs.as_deref_mut() {
+                    w.push(v);
+                }
+            }
+        }
+        true
+    }
+
+    fn theta_for_tests(rho: f64, eta: f64, kappa: f64) -> [f64; N_TIME_PARAMS] {
+        let mut th = [0.0; N_TIME_PARAMS];
+        th[ALPHA] = 1.8e5;
+        th[DELTA] = 20.0;
+        th[BETA] = 7e5;
+        th[RHO] = rho;
+        th[KAPPA] = kappa;
+        th[ETA] = eta;
+        th[GAIN] = 1.9e5;
+        th[INPUT_OFFSET] = -0.008;
+        th[OUTPUT_OFFSET] = 0.003;
+        th[X0] = 0.03;
+        th[V0] = -40.0;
+        th
+    }
+
+    fn input_for_tests(n: usize) -> Vec<f64> {
+        (0..n)
+            .map(|k| {
+                let t = k as f64 / 610.0;
+                0.1 * (2.0 * std::f64::consts::PI * 60.0 * t).sin()
+                    + 0.05 * (2.0 * std::f64::consts::PI * 13.0 * t + 0.3).sin()
+            })
+            .collect()
+    }
+
+    /// The fast path (trajectory, then the sensitivities column by column,
+    /// split between threads, powers by exp(μ ln|s|)) against the joint
+    /// recurrence with powf: identical for the exact exponents 0, 1, 2,
+    /// equal to rounding otherwise.
+    #[test]
+    fn fast_path_matches_the_reference() {
+        let fs = 610.0;
+        let u = input_for_tests(3000);
+        for (rho, eta, kappa, exact) in [
+            (2.0, 0.0, 0.0, true),
+            (2.0, 1.0, 0.5, true),
+            (1.98, 0.0166, 39.5, false),
+            (2.7, 0.4, 3.0, false),
+        ] {
+            let th = theta_for_tests(rho, eta, kappa);
+            for disc in [
+                Discretisation::new(InputInterpolation::Cubic, 2).unwrap(),
+                Discretisation::new(InputInterpolation::Zoh, 3).unwrap(),
+            ] {
+                let fine = disc.fine(&u);
+                for logs in [(false, false), (true, true)] {
+                    let (mut y0, mut j0, mut v0) = (Vec::new(), Vec::new(), Vec::new());
+                    assert!(run_reference(
+                        &th,
+                        &fine,
+                        fs,
+                        &disc,
+                        &mut y0,
+                        Some(&mut j0),
+                        logs,
+                        Some(&mut v0)
+                    ));
+                    let (mut y1, mut j1, mut v1) = (Vec::new(), Vec::new(), Vec::new());
+                    assert!(run(
+                        &th,
+                        &fine,
+                        fs,
+                        &disc,
+                        &mut y1,
+                        Some(&mut j1),
+                        logs,
+                        Some(&mut v1)
+                    ));
+                    assert_eq!(y0.len(), u.len());
+                    assert_eq!((y1.len(), j1.len(), v1.len()), (u.len(), u.len(), u.len()));
+                    let close = |a: &[f64], b: &[f64]| {
+                        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+                        let err = a
+                            .iter()
+                            .zip(b)
+                            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                        if exact {
+                            assert!(err == 0.0, "{rho} {eta}: {err:e}");
+                        } else {
+                            assert!(err <= 1e-11 * scale, "{rho} {eta}: {err:e} of {scale:e}");
+                        }
+                    };
+                    close(&y1, &y0);
+                    close(&v1, &v0);
+                    for p in 0..N_TIME_PARAMS {
+                        let c0: Vec<f64> = j0.iter().map(|r| r[p]).collect();
+                        let c1: Vec<f64> = j1.iter().map(|r| r[p]).collect();
+                        close(&c1, &c0);
+                    }
+                    // any grouping of the columns gives the same values
+                    let mut ys = Vec::new();
+                    let mut st = Vec::new();
+                    assert!(trajectory(
+                        &th,
+                        &fine,
+                        fs,
+                        &disc,
+                        logs,
+                        &mut ys,
+                        None,
+                        Some(&mut st)
+                    ));
+                    let cols = [KAPPA, X0, ALPHA, ETA, OUTPUT_OFFSET];
+                    let mut part = Vec::new();
+                    sensitivities(&th, &fine, fs, &disc, logs, &st, &cols, &mut part);
+                    for (k, row) in part.chunks_exact(cols.len()).enumerate() {
+                        for (q, &p) in cols.iter().enumerate() {
+                            assert_eq!(row[q].to_bits(), j1[k][p].to_bits());
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The Jacobian of the least-squares problem from the trajectory kept by
+    /// the last residual evaluation is the one computed afresh, bit for bit.
+    #[test]
+    fn reused_trajectory_gives_the_same_jacobian() {
+        let fs = 610.0;
+        let u = input_for_tests(10_000);
+        let disc = Discretisation::new(InputInterpolation::Cubic, 2).unwrap();
+        let fine = disc.fine(&u);
+        let th = theta_for_tests(1.98, 0.0166, 39.5);
+        let mut y = Vec::new();
+        assert!(run(
+            &th,
+            &fine,
+            fs,
+            &disc,
+            &mut y,
+            None,
+            (false, false),
+            None
+        ));
+        for (k, v) in y.iter_mut().enumerate() {
+            *v += 1e-4 * ((k as f64) * 0.37).sin();
+        }
+        let free: Vec<usize> = (0..N_TIME_PARAMS).collect();
+        let scale: Vec<f64> = th.iter().map(|v| v.abs().max(1.0)).collect();
+        let problem = || OutputError {
+            fine: &fine,
+            y: &y,
+            fs,
+            disc,
+            base: th,
+            free: &free,
+            scale: scale.clone(),
+            logs: (true, true),
+            last: Default::default(),
+        };
+        let z: Vec<f64> = th.iter().zip(&scale).map(|(t, s)| t / s * 1.0001).collect();
+        let z2: Vec<f64> = z.iter().map(|v| v * 0.9999).collect();
+        let fresh = problem().residuals_and_jacobian(&z).unwrap();
+        let p = problem();
+        let r = p.residuals(&z2).unwrap();
+        assert_ne!(r, fresh.0);
+        let r = p.residuals(&z).unwrap();
+        let reused = p.residuals_and_jacobian(&z).unwrap();
+        assert_eq!(r, fresh.0);
+        assert_eq!(reused, fresh);
+        // a different point after it: computed afresh
+        let again = p.residuals_and_jacobian(&z2).unwrap();
+        assert_eq!(again, problem().residuals_and_jacobian(&z2).unwrap());
     }
 
     #[test]

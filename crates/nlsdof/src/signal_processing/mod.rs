@@ -5,17 +5,21 @@
 //!   estimators, ordinary coherence, and the spectral ratio `Y/X` of a
 //!   single record (sine sweep or impact).
 //! * [`stft`] — STFT spectrograms and the Eq 33 difference of two.
+//! * [`frf_estimate`] — the FRF of `nlsdof frf-estimate` (H1, H2 or ratio
+//!   on a band, lines without input power left out).
 //! * [`spectrogram_comparison`] — a measured record against the model's in
 //!   one call ([`compare_records`]): spectrograms, band, Eq 33.
 //!
 //! Pure mathematics: samples in, spectra out (frequencies in Hz here,
 //! since they come from a sampling frequency in Hz).
 
+pub mod frf_estimate;
 pub mod spectrogram_comparison;
 pub mod stft;
 pub mod welch;
 pub mod window;
 
+pub use frf_estimate::{estimate_frf, FrfEstimateError, FrfEstimateOptions, FrfLines, FrfMethod};
 pub use spectrogram_comparison::{
     compare_records, ComparisonError, ComparisonOptions, SpectrogramComparison,
 };

@@ -51,6 +51,7 @@
 //! run; three times for another method (the default run as well).
 
 use super::{simulate_upsampled, RecordMethod, Sample, State, Upsampling, DEFAULT_UPSAMPLING};
+use crate::cancel::Cancel;
 use crate::error::SimulationError;
 use crate::model::{AsNormalised, NormalisedModel};
 
@@ -128,6 +129,20 @@ pub fn record_error_estimate(
     initial: State,
     x: &[f64],
 ) -> Result<IntegrationError, SimulationError> {
+    record_error_estimate_cancellable(model, values, grid, method, initial, x, Cancel::NEVER)
+}
+
+/// As [`record_error_estimate`], polling `cancel` every 2^16 samples of its
+/// runs ([`SimulationError::Interrupted`] once it is set, [`crate::cancel`]).
+pub fn record_error_estimate_cancellable(
+    model: &(impl AsNormalised + ?Sized),
+    values: &[f64],
+    grid: (f64, f64, f64),
+    method: RecordMethod,
+    initial: State,
+    x: &[f64],
+    cancel: Cancel,
+) -> Result<IntegrationError, SimulationError> {
     let model = &model.as_normalised()?;
     let order = convergence_order(model);
     let n = x.len().min(values.len());
@@ -149,6 +164,7 @@ pub fn record_error_estimate(
         let opts = Upsampling {
             factor: DEFAULT_UPSAMPLING,
             initial,
+            cancel,
         };
         simulate_upsampled(model, values, grid, &opts, &mut |s: Sample| v.push(s.x))?;
         own = v;
@@ -159,6 +175,7 @@ pub fn record_error_estimate(
     let opts = Upsampling {
         factor: 2 * DEFAULT_UPSAMPLING,
         initial,
+        cancel,
     };
     simulate_upsampled(model, values, grid, &opts, &mut |s: Sample| {
         if s.index < n {

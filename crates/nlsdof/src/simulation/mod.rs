@@ -106,12 +106,12 @@ mod upsampled;
 
 pub use crate::error::SimulationError;
 pub use error_estimate::{
-    convergence_order, integration_warning, record_error_estimate, step_doubling_error,
-    IntegrationError, INTEGRATION_WARN,
+    convergence_order, integration_warning, record_error_estimate,
+    record_error_estimate_cancellable, step_doubling_error, IntegrationError, INTEGRATION_WARN,
 };
 pub use upsampled::{
-    rk4_cubic_error_estimate, simulate_record, simulate_upsampled, RecordMethod, Upsampling,
-    DEFAULT_UPSAMPLING,
+    rk4_cubic_error_estimate, simulate_record, simulate_record_cancellable, simulate_upsampled,
+    RecordMethod, Upsampling, DEFAULT_UPSAMPLING,
 };
 
 use crate::excitation::{Excitation, SampledInput};

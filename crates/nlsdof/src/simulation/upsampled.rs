@@ -6,6 +6,7 @@
 //! through the samples, at a step below the sampling interval).
 
 use super::{simulate, Method, Options, Sample, State, Summary};
+use crate::cancel::Cancel;
 use crate::error::SimulationError;
 use crate::excitation::{upsample_cubic, SampledInput};
 use crate::model::AsNormalised;
@@ -17,6 +18,9 @@ pub struct Upsampling {
     pub factor: usize,
     /// State at the first sample.
     pub initial: State,
+    /// Polled between chunks of 2^16 samples: once set, the run ends with
+    /// [`SimulationError::Interrupted`] ([`crate::cancel`]).
+    pub cancel: crate::cancel::Cancel,
 }
 
 /// Simulates Eq 32 driven by `gain · values` sampled at `fs` Hz from `t0`
@@ -61,6 +65,7 @@ pub fn simulate_upsampled(
     });
     let mut start = 0;
     while start + 1 < n {
+        opts.cancel.check()?;
         let end = (start + CHUNK).min(n - 1);
         let (lo, hi) = (start.saturating_sub(1), (end + 2).min(n - 1));
         let fine = upsample_cubic(&values[lo..=hi], factor);
@@ -129,12 +134,29 @@ pub fn simulate_record(
     initial: State,
     sink: &mut dyn FnMut(Sample),
 ) -> Result<Summary, SimulationError> {
+    simulate_record_cancellable(model, values, grid, method, initial, sink, Cancel::NEVER)
+}
+
+/// As [`simulate_record`]; the default method ([`RecordMethod::Rk4Cubic`])
+/// polls `cancel` every 2^16 samples and then ends with
+/// [`SimulationError::Interrupted`] ([`crate::cancel`]). (The other methods
+/// run to the end: `cancel` is checked once they have.)
+pub fn simulate_record_cancellable(
+    model: &(impl AsNormalised + ?Sized),
+    values: &[f64],
+    grid: (f64, f64, f64),
+    method: RecordMethod,
+    initial: State,
+    sink: &mut dyn FnMut(Sample),
+    cancel: Cancel,
+) -> Result<Summary, SimulationError> {
     let (gain, t0, fs) = grid;
     let method = match method {
         RecordMethod::Rk4Cubic => {
             let opts = Upsampling {
                 factor: DEFAULT_UPSAMPLING,
                 initial,
+                cancel,
             };
             return simulate_upsampled(model, values, grid, &opts, sink);
         }
@@ -147,7 +169,9 @@ pub fn simulate_record(
         initial,
         decimation: 1,
     };
-    simulate(model, &input, &opts, sink)
+    let summary = simulate(model, &input, &opts, sink)?;
+    cancel.check()?;
+    Ok(summary)
 }
 
 /// Estimated integration error of a [`RecordMethod::Rk4Cubic`] run, relative

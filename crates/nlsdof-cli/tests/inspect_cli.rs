@@ -132,6 +132,21 @@ fn demo_wing_gives_the_model_exponents() {
         text.contains("From inspect") && text.contains("landscape node rho = "),
         "{text}"
     );
+    // a model that holds both exponents takes no extra start
+    let d = json(&[
+        "fit",
+        csv.to_str().unwrap(),
+        "--model",
+        "duffing",
+        "--from-inspect",
+        "--json",
+    ]);
+    assert!(
+        d["from_inspect"]["start_node"].is_null(),
+        "{}",
+        d["from_inspect"]
+    );
+    assert!(!d["from_inspect"]["rho"]["fit_free"].as_bool().unwrap());
     // without the flag there is no such section
     let plain = json(&["fit", csv.to_str().unwrap(), "--json"]);
     assert!(plain.get("from_inspect").is_none());

@@ -849,7 +849,7 @@ fn from_inspect_text(r: &Inspection, id: &Identification) -> String {
             "  the race also started from the landscape node rho = {rho:.3}, eta = {eta:.3}\n"
         )),
         None => out.push_str(
-            "  no extra start: the model holds the exponents, or inspect determined neither\n",
+            "  no extra start: the model holds both exponents, or inspect determined neither\n",
         ),
     }
     out

@@ -914,9 +914,11 @@ pub fn identify(
     let mut fit_data = data_as_fitted(&setup, &ex);
     let mut refine_data = subsample(&fit_data, plan.refine_points);
     let mut nodes = candidate_nodes(&ex.land, plan.refine.max(1));
+    // (a single-node landscape: the model holds both exponents, no start)
     let start_node = plan
         .start_exponents
         .as_ref()
+        .filter(|_| ex.land.rho.len() * ex.land.eta.len() > 1)
         .and_then(|s| nearest_node(&ex.land, s));
     if let Some(n) = start_node {
         if !nodes.contains(&n) {

@@ -28,6 +28,7 @@ pub mod atomic;
 pub mod bounds_file;
 pub mod csv_table;
 pub mod error;
+pub mod format;
 pub mod frf_file;
 pub mod input;
 pub mod mat5;

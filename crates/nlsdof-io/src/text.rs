@@ -30,42 +30,7 @@ pub fn shown(s: &str) -> String {
     out
 }
 
-/// What a file is when it is not a text table, from its first bytes:
-/// `Some(description)` for compressed, archive, MAT or UTF-16 files and for
-/// anything with a NUL byte in its first 4 KiB; `None` for text.
-pub fn not_text(bytes: &[u8]) -> Option<String> {
-    let head = &bytes[..bytes.len().min(4096)];
-    if head.starts_with(&[0x1f, 0x8b]) {
-        return Some("gzip-compressed data (decompress it first)".into());
-    }
-    if head.starts_with(b"PK\x03\x04") {
-        return Some("a zip archive (extract the table first)".into());
-    }
-    if head.starts_with(b"MATLAB 5.0 MAT-file") {
-        return Some(
-            "a MATLAB MAT-file, not a text table (export the columns as CSV, e.g. with scipy.io.loadmat)"
-                .into(),
-        );
-    }
-    if head.starts_with(&[0xff, 0xfe]) || head.starts_with(&[0xfe, 0xff]) {
-        return Some("UTF-16 text (save it as UTF-8)".into());
-    }
-    let nul = head.iter().position(|&b| b == 0)?;
-    // ASCII in UTF-16: every other byte NUL
-    let utf16 = head.len() >= 8
-        && head
-            .chunks(2)
-            .take(64)
-            .filter(|p| p.len() == 2 && (p[0] == 0) != (p[1] == 0))
-            .count()
-            * 10
-            >= head.chunks(2).take(64).count() * 9;
-    Some(if utf16 {
-        "UTF-16 text without a byte-order mark (save it as UTF-8)".into()
-    } else {
-        format!("binary data (a NUL byte at offset {nul}), not a text table")
-    })
-}
+pub use crate::format::not_text;
 
 /// Largest text file read whole (the stepped-sine, phase-resonance and FRF
 /// tables and the CSV/Polytec time histories of `frf-estimate`): 256 MiB.
@@ -127,7 +92,7 @@ pub fn read_text(path: &std::path::Path) -> Result<String, TextFileError> {
             .unwrap_or(bytes.len() as u64);
         return Err(TextFileError::TooLarge { bytes });
     }
-    if let Some(what) = crate::input::not_text_format(&bytes, path) {
+    if let Some(what) = crate::format::not_text_format(&bytes, path) {
         return Err(TextFileError::NotText(what));
     }
     Ok(decode(&bytes).into_owned())

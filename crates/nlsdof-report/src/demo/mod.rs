@@ -43,7 +43,31 @@ fn write_svg(dir: &Path, name: &str, svg: String) -> Result<(), ReportError> {
     Ok(())
 }
 
-const AMP_LABEL: &str = "amplitude a [mm], zero-to-peak";
+/// The length unit of every figure of the run, chosen once from the largest
+/// measured amplitude ([`nlsdof_figure::length_unit`]): name and scale
+/// from metres.
+#[derive(Clone, Copy)]
+struct Length(&'static str, f64);
+
+impl Length {
+    fn of(demo: &Demo) -> Self {
+        let peak = demo
+            .runs
+            .iter()
+            .filter_map(|r| r.measured.as_ref())
+            .flat_map(|m| m.data.curves.iter().flat_map(|c| c.amplitudes.iter()))
+            .map(|a| a.abs())
+            .filter(|a| a.is_finite())
+            .fold(0.0f64, f64::max);
+        let (name, scale) = nlsdof_figure::length_unit(peak);
+        Length(name, scale)
+    }
+
+    fn amplitude_label(self) -> String {
+        format!("amplitude a [{}], zero-to-peak", self.0)
+    }
+}
+
 const F_LABEL: &str = "frequency f [Hz]";
 
 fn level_label(i: usize) -> String {
@@ -55,14 +79,14 @@ fn level_label(i: usize) -> String {
 }
 
 /// Fig 2: the "measured" stepped-sine curves.
-fn fig2(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
+fn fig2(demo: &Demo, dir: &Path, len: Length) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let m = run.measured.as_ref().expect("ran");
         let mut amp = Panel::new(
             format!("{}: amplitude (rig + noise)", run.cfg.title),
             F_LABEL,
-            AMP_LABEL,
+            &len.amplitude_label(),
         );
         let mut ph = Panel::new(
             format!("{}: phase lag of x behind the input", run.cfg.title),
@@ -74,7 +98,7 @@ fn fig2(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
                 .omegas
                 .iter()
                 .zip(&c.amplitudes)
-                .map(|(&w, &a)| (hz(w), 1e3 * a))
+                .map(|(&w, &a)| (hz(w), len.1 * a))
                 .collect();
             amp.series
                 .push(Series::new(pts.clone(), colour(i), Style::Line(1)).label(level_label(i)));
@@ -93,7 +117,7 @@ fn fig2(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
         let pq: Vec<(f64, f64)> = m
             .truth_pq
             .iter()
-            .map(|r| (hz(r.measured_omega), 1e3 * r.measured_amplitude))
+            .map(|r| (hz(r.measured_omega), len.1 * r.measured_amplitude))
             .collect();
         amp.series.push(
             Series::new(pq, RGBA_BLACK, Style::Filled(4)).label("phase quadrature (90° crossing)"),
@@ -213,12 +237,12 @@ fn fig4(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
 }
 
 /// Data (dots) and the fitted model's branch-following sweep (lines).
-fn fit_panel(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Panel {
+fn fit_panel(run: &nlsdof::demo::ConfigRun, f: &FitEntry, len: Length) -> Panel {
     let m = run.measured.as_ref().expect("ran");
     let mut p = Panel::new(
         format!("{}: {}", run.cfg.title, f.label),
         F_LABEL,
-        AMP_LABEL,
+        &len.amplitude_label(),
     );
     let mut off = 0;
     for (i, c) in m.data.curves.iter().enumerate() {
@@ -227,13 +251,13 @@ fn fit_panel(run: &nlsdof::demo::ConfigRun, f: &FitEntry) -> Panel {
             .omegas
             .iter()
             .zip(&c.amplitudes)
-            .map(|(&w, &a)| (hz(w), 1e3 * a))
+            .map(|(&w, &a)| (hz(w), len.1 * a))
             .collect();
         let model: Vec<(f64, f64)> = c
             .omegas
             .iter()
             .zip(&f.result.model_amplitudes[off..off + n])
-            .map(|(&w, &a)| (hz(w), 1e3 * a))
+            .map(|(&w, &a)| (hz(w), len.1 * a))
             .collect();
         p.series.push(Series::new(data, colour(i), Style::Dots(2)));
         p.series
@@ -257,13 +281,14 @@ fn fit_figure(
     ids: &[&str],
     name: &str,
     title: &str,
+    len: Length,
 ) -> Result<(), ReportError> {
     // common y range over the figure so the panels compare at a glance
     let mut panels = Vec::new();
     for id in ids {
         for run in &demo.runs {
             let f = run.fits.iter().find(|f| f.id == *id).expect("fit ran");
-            panels.push(fit_panel(run, f));
+            panels.push(fit_panel(run, f, len));
         }
     }
     let top = panels.iter().map(max_y).fold(0.0, f64::max) * 1.08;
@@ -289,21 +314,21 @@ fn short(f: &FitEntry) -> &'static str {
 }
 
 /// RMS residual per level of every model, with the noise level.
-fn fig_rms(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
+fn fig_rms(demo: &Demo, dir: &Path, len: Length) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let m = run.measured.as_ref().expect("ran");
         let mut p = Panel::new(
             format!("{}: RMS residual per level", run.cfg.title),
             "input level γ [m/s²], zero-to-peak",
-            "RMS of (a_model − a_meas) [mm], log scale",
+            &format!("RMS of (a_model − a_meas) [{}], log scale", len.0),
         );
         for (i, f) in run.fits.iter().enumerate() {
             let pts: Vec<(f64, f64)> = f
                 .result
                 .levels
                 .iter()
-                .map(|l| (l.gamma, 1e3 * l.rms))
+                .map(|l| (l.gamma, len.1 * l.rms))
                 .collect();
             p.series
                 .push(Series::new(pts.clone(), colour(i), Style::Line(2)).label(short(f)));
@@ -320,7 +345,7 @@ fn fig_rms(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
                 .zip(&sw.points)
                 .map(|(a, p)| (a - p.amplitude).powi(2))
                 .sum();
-            noise.push((c.gamma, 1e3 * (s2 / n as f64).sqrt()));
+            noise.push((c.gamma, len.1 * (s2 / n as f64).sqrt()));
             off += n;
         }
         let _ = off;
@@ -349,20 +374,20 @@ fn fig_rms(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
 }
 
 /// Per-step peak |x| of the full-length time simulation.
-fn fig_time(demo: &Demo, dir: &Path) -> Result<(), ReportError> {
+fn fig_time(demo: &Demo, dir: &Path, len: Length) -> Result<(), ReportError> {
     let mut panels = Vec::new();
     for run in &demo.runs {
         let mut p = Panel::new(
             format!("{}: stepped-sine time simulation", run.cfg.title),
             "step frequency f [Hz]",
-            "peak |x| over each dwell's 2nd half [mm]",
+            &format!("peak |x| over each dwell's 2nd half [{}]", len.0),
         );
         for tl in &run.time {
             if !SPECTROGRAM_LEVELS.contains(&tl.level) {
                 continue;
             }
-            let meas: Vec<(f64, f64)> = tl.envelope.iter().map(|e| (e.0, 1e3 * e.1)).collect();
-            let model: Vec<(f64, f64)> = tl.envelope.iter().map(|e| (e.0, 1e3 * e.2)).collect();
+            let meas: Vec<(f64, f64)> = tl.envelope.iter().map(|e| (e.0, len.1 * e.1)).collect();
+            let model: Vec<(f64, f64)> = tl.envelope.iter().map(|e| (e.0, len.1 * e.2)).collect();
             p.series.push(
                 Series::new(meas, colour(tl.level), Style::Dots(2))
                     .label(format!("measured, {}", level_label(tl.level))),
@@ -1038,7 +1063,8 @@ pub const WRITE_STEPS: u64 = 8;
 /// `dir`, calling `step` [`WRITE_STEPS`] times as it goes (for a progress
 /// bar).
 pub fn write_all(demo: &Demo, dir: &Path, step: &dyn Fn()) -> Result<Written, ReportError> {
-    fig2(demo, dir)?;
+    let len = Length::of(demo);
+    fig2(demo, dir, len)?;
     step();
     fig4(demo, dir)?;
     step();
@@ -1048,6 +1074,7 @@ pub fn write_all(demo: &Demo, dir: &Path, step: &dyn Fn()) -> Result<Written, Re
         &["classic-a", "classic-b", "classic"],
         "fig5_classic.svg",
         "Fig 5 analogue: classic model (Duffing + quadratic damping), fitted to (top) levels 1-2, (middle) levels 4-5, (bottom) all levels — dots: data, lines: model",
+        len,
     )?;
     step();
     fit_figure(
@@ -1056,6 +1083,7 @@ pub fn write_all(demo: &Demo, dir: &Path, step: &dyn Fn()) -> Result<Written, Re
         &["dg-int", "dg-real"],
         "fig6_duffing_generalised.svg",
         "Fig 6 analogue: Duffing stiffness + generalised damping, (top) integer η, (bottom) real η",
+        len,
     )?;
     step();
     fit_figure(
@@ -1064,10 +1092,11 @@ pub fn write_all(demo: &Demo, dir: &Path, step: &dyn Fn()) -> Result<Written, Re
         &["g-int", "g-real"],
         "fig7_generalised.svg",
         "Fig 7 analogue: generalised stiffness and damping, (top) integer ρ, η, (bottom) real ρ, η",
+        len,
     )?;
     step();
-    fig_rms(demo, dir)?;
-    fig_time(demo, dir)?;
+    fig_rms(demo, dir, len)?;
+    fig_time(demo, dir, len)?;
     let landscape = fig_landscape(demo, dir)?;
     step();
     let pngs = fig8_png(demo, dir)?;

@@ -13,7 +13,10 @@ Duffing oscillator, f_n = 10 Hz): no files needed.
 4. ``nlsdof.plot.fit_time``: measured and model output of a time fit;
 5. ``nlsdof.plot.linear_id``: |H|, phase and Nyquist (``nlsdof linear-id
    --plot``);
-6. ``Spectrogram.plot``: the STFT heat map (``nlsdof spectrogram --plot``).
+6. ``Spectrogram.plot``: the STFT heat map (``nlsdof spectrogram --plot``);
+7. ``.plot()`` on the documents themselves: ``decay``, ``fit_time`` and
+   ``linear_id`` return a ``Report`` (a dict with ``plot()``), so
+   ``nlsdof.decay(x, fs).plot(x)`` draws 3.'s first panel.
 
 SI units; amplitudes zero-to-peak, drawn in one length unit chosen from the
 data and stated on each axis.
@@ -94,6 +97,13 @@ def main() -> None:
     # 6. spectrogram of the chirp's response
     ax = nlsdof.spectrogram(y, fs).plot()
     ax.figure.savefig(out / "spectrogram.png", dpi=100)
+
+    # 7. the results draw themselves (typed: the stubs return Report)
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
+    d.plot(x, ax=axes[0], column="x", unit="m")
+    tf.plot(y, ax=axes[1])
+    lin.plot(ax=axes[2], what="nyquist")
+    fig.savefig(out / "report_plots.png", dpi=100)
     print(f"figures written to {out}/")
 
 

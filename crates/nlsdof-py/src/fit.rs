@@ -4,6 +4,7 @@
 
 use crate::arrays::{f64_array, values};
 use crate::convert::{to_py, value_error};
+use nlsdof::identification::profile::OutputErrorProfile;
 use nlsdof::identification::{
     identify, Dataset, FitPlan, GainChoice, Identification, JumpChoice, ModelKind, PhaseChoice,
     PhaseConvention, SignChoice, Status, Weighting, PARAM_NAMES,
@@ -272,6 +273,52 @@ struct FitState {
     /// `intervals="all"` (absent in states pickled before it: one).
     #[serde(default)]
     all_intervals: bool,
+    /// The output-error profiles `profile()` computed (absent in states
+    /// pickled before they were kept: none).
+    #[serde(default)]
+    profiles: Vec<ProfileState>,
+}
+
+/// An [`OutputErrorProfile`] as pickled (the library's type is not serde).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ProfileState {
+    /// Index into `Parameter::ALL`.
+    parameter: usize,
+    estimate: f64,
+    lower: Option<f64>,
+    upper: Option<f64>,
+    points: Vec<(f64, f64)>,
+    fits: usize,
+    start: f64,
+    lowest: (f64, f64),
+}
+
+impl ProfileState {
+    fn of(p: &OutputErrorProfile) -> Self {
+        ProfileState {
+            parameter: p.parameter as usize,
+            estimate: p.estimate,
+            lower: p.lower,
+            upper: p.upper,
+            points: p.points.clone(),
+            fits: p.fits,
+            start: p.start,
+            lowest: p.lowest,
+        }
+    }
+
+    fn profile(self) -> Option<OutputErrorProfile> {
+        Some(OutputErrorProfile {
+            parameter: *Parameter::ALL.get(self.parameter)?,
+            estimate: self.estimate,
+            lower: self.lower,
+            upper: self.upper,
+            points: self.points,
+            fits: self.fits,
+            start: self.start,
+            lowest: self.lowest,
+        })
+    }
 }
 
 /// The pickled state of each curve: level, gamma, direction, omegas (rad/s),
@@ -673,6 +720,7 @@ pub fn fit(
         source,
         integer,
         all_intervals,
+        profiles: std::sync::Mutex::new(Vec::new()),
     })
 }
 
@@ -740,6 +788,17 @@ pub struct FitResult {
     integer: bool,
     /// `intervals="all"`: `report()` shows every interval computed.
     all_intervals: bool,
+    /// The output-error profiles `profile()` computed, one per exponent
+    /// (the latest): `report()` and `to_dict()` show them as the one
+    /// interval of that exponent, as `nlsdof fit --profile` does.
+    profiles: std::sync::Mutex<Vec<OutputErrorProfile>>,
+}
+
+impl FitResult {
+    /// The profiles computed so far (a copy).
+    fn computed_profiles(&self) -> Vec<OutputErrorProfile> {
+        self.profiles.lock().map(|p| p.clone()).unwrap_or_default()
+    }
 }
 
 #[pymethods]
@@ -846,7 +905,10 @@ impl FitResult {
         let mut doc = nlsdof_report::fit::identification_document(&self.id, self.mass)
             .map_err(value_error)?;
         // parameters[].interval: the one interval reported, with its method
-        nlsdof_report::intervals::add_chosen_json(&mut doc, &self.id.fit, &[]);
+        // (the output-error profile where `profile()` computed it, as
+        // `nlsdof fit --profile --json`)
+        let profiles = self.computed_profiles();
+        nlsdof_report::intervals::add_chosen_json(&mut doc, &self.id.fit, &profiles);
         if self.integer {
             doc["integer_pairs"] = nlsdof_report::fit::integer_nodes_json(&self.id);
         }
@@ -862,7 +924,9 @@ impl FitResult {
     /// the optimum in `step`s (default half its linearised standard error)
     /// until `(P - P*)/sigma^2` crosses chi2_1(0.95) = 3.84. Returns the
     /// entry of `nlsdof fit --profile --json`: `estimate`, `ci95` (None:
-    /// open), `fits`, `points`.
+    /// open), `fits`, `points`. The profile is kept (also when pickled):
+    /// `report()` and `to_dict()` then give it as this exponent's one 95 %
+    /// interval ("output-error profile"), as `nlsdof fit --profile`.
     #[pyo3(signature = (parameter="rho", step=None, max_steps=24, *, progress=None))]
     fn profile<'py>(
         &self,
@@ -900,13 +964,20 @@ impl FitResult {
         })?
         .map_err(value_error)?;
         let doc = nlsdof_report::fit::profiles_json(std::slice::from_ref(&prof));
+        // kept: report() and to_dict() show it as this exponent's interval
+        if let Ok(mut kept) = self.profiles.lock() {
+            kept.retain(|q| q.parameter != prof.parameter);
+            kept.push(prof);
+            kept.sort_by_key(|q| q.parameter as usize);
+        }
         to_py(py, &doc[p.info().name])
     }
     /// The text report of `nlsdof fit`: one 95 % interval per parameter,
-    /// named by its method (Wald: `profile()` computes the output-error
-    /// profile separately); `intervals="all"` (default: as given to `fit`)
-    /// adds every other interval with what it leaves out, as `nlsdof fit
-    /// --intervals all`.
+    /// named by its method: the output-error profile of an exponent once
+    /// `profile()` computed it (and did not refuse it), else Wald, as
+    /// `nlsdof fit --profile --intervals one`; `intervals="all"` (default: as
+    /// given to `fit`) adds every other interval with what it leaves out, as
+    /// `nlsdof fit --intervals all`.
     #[pyo3(signature = (intervals=None))]
     fn report(&self, intervals: Option<&str>) -> PyResult<String> {
         let view = match intervals {
@@ -914,8 +985,9 @@ impl FitResult {
             None if self.all_intervals => IntervalView::All,
             None => IntervalView::One,
         };
+        let profiles = self.computed_profiles();
         let mut text =
-            nlsdof_report::fit::identification_report_with(&self.id, self.mass, &[], view)
+            nlsdof_report::fit::identification_report_with(&self.id, self.mass, &profiles, view)
                 .map_err(value_error)?;
         if self.integer {
             text.push_str(&nlsdof_report::fit::integer_nodes_text(&self.id));
@@ -1014,6 +1086,11 @@ impl FitResult {
             source: me.source.clone(),
             integer: me.integer,
             all_intervals: me.all_intervals,
+            profiles: me
+                .computed_profiles()
+                .iter()
+                .map(ProfileState::of)
+                .collect(),
         };
         let mut bytes = Vec::new();
         ciborium::into_writer(&state, &mut bytes).map_err(value_error)?;
@@ -1039,6 +1116,12 @@ impl FitResult {
             source: s.source,
             integer: s.integer,
             all_intervals: s.all_intervals,
+            profiles: std::sync::Mutex::new(
+                s.profiles
+                    .into_iter()
+                    .filter_map(ProfileState::profile)
+                    .collect(),
+            ),
         })
     }
     /// Equal when the two identifications are the same bit for bit (data,

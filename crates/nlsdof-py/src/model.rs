@@ -584,7 +584,7 @@ impl Model {
             return self.simulation(py, x, v, error, record);
         }
         // Ctrl-C stops it (KeyboardInterrupt): the default method and the
-        // check poll the flag every 2^16 samples
+        // check poll the flag every 2^16 samples, "dopri" every 4096
         let (x, v, error) = crate::interrupt::run(py, None, "simulate", |cancel, _| {
             let mut x = Vec::with_capacity(u.len());
             let mut v = Vec::with_capacity(u.len());

@@ -5,9 +5,9 @@
 //! Python sees the numbers the CLI uses.
 
 use crate::convert::value_error;
-use nlsdof_io::frf_file::{read_polytec_sweep as io_read_polytec_sweep, read_time_history};
+use nlsdof_io::frf_file::{parse_time_history, read_polytec_sweep as io_read_polytec_sweep};
 use nlsdof_io::signal_file::SignalFileError;
-use nlsdof_io::table_file::{read_columns, read_picked, TableError};
+use nlsdof_io::table_file::{parse_columns, read_columns, read_picked, TableError};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyDict, PyList};
@@ -134,9 +134,25 @@ pub fn read_polytec<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, 
             path.display()
         )));
     }
+    // the file is read once: the channel and the time column are parsed
+    // from the same text (read_time_history and read_columns each read it)
     let (th, t) = py.detach(|| {
-        let th = read_time_history(&path, None).map_err(value_error)?;
-        let t = read_columns(&path, &["0"]).map_err(value_error)?;
+        let text = nlsdof_io::text::read_text(&path).map_err(|e| {
+            value_error(match e {
+                nlsdof_io::text::TextFileError::Read(source) => {
+                    nlsdof_io::frf_file::FrfFileError::Read {
+                        path: path.clone(),
+                        source,
+                    }
+                }
+                e => nlsdof_io::frf_file::FrfFileError::Content {
+                    path: path.clone(),
+                    message: e.to_string(),
+                },
+            })
+        })?;
+        let th = parse_time_history(&text, &path, None).map_err(value_error)?;
+        let t = parse_columns(text.as_bytes(), &path, &["0"]).map_err(value_error)?;
         Ok::<_, PyErr>((th, t))
     })?;
     let d = PyDict::new(py);

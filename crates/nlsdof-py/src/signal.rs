@@ -144,15 +144,23 @@ pub fn linear_id<'py>(
             }
         },
         max_iterations,
+        cancel: nlsdof::cancel::Cancel::NEVER,
     };
     if let Some(m) = mass {
         if !(m.is_finite() && m > 0.0) {
             return Err(value_error(format!("mass {m}: must be finite and > 0 kg")));
         }
     }
-    let id = py
-        .detach(|| identify_sdof(&measured, &opts))
-        .map_err(value_error)?;
+    // Ctrl-C stops it (KeyboardInterrupt): the flag is polled before each
+    // vector-fitting relocation and residue solve
+    let id = crate::interrupt::run(py, None, "linear_id", |cancel, _| {
+        let opts = SdofIdOptions {
+            cancel,
+            ..opts.clone()
+        };
+        identify_sdof(&measured, &opts)
+    })?
+    .map_err(value_error)?;
     let used: Vec<f64> = id.points.iter().map(|&i| f[i]).collect();
     let out = to_py(py, &nlsdof_report::linear_id::json(&id, &used))?;
     // beyond the CLI's document: what its figure draws (nlsdof.plot.linear_id)
@@ -361,15 +369,17 @@ pub fn spectrogram<'py>(
         detrend,
         scaling,
     )?;
-    let opts = ComparisonOptions {
-        stft,
+    let mut opts = ComparisonOptions {
         band: (f_min, f_max),
-        time_offset: 0.0,
-        floor_fraction: 0.01,
+        ..ComparisonOptions::new(stft)
     };
-    let cmp = py
-        .detach(|| compare_records(&x, None, &opts))
-        .map_err(value_error)?;
+    // Ctrl-C stops it (KeyboardInterrupt): the flag is polled before each
+    // segment
+    let cmp = crate::interrupt::run(py, None, "spectrogram", |cancel, _| {
+        opts.cancel = cancel;
+        compare_records(&x, None, &opts)
+    })?
+    .map_err(value_error)?;
     let s = cmp.measured;
     let (nt, nf) = (s.n_time, s.n_freq);
     let magnitude = PyArray1::from_vec(py, s.magnitude).reshape([nt, nf])?;
@@ -437,15 +447,17 @@ pub fn compare_spectrograms<'py>(
         scaling,
     )?;
     let layout = stft.layout(x.len()).map_err(value_error)?;
-    let opts = ComparisonOptions {
-        stft,
+    let mut opts = ComparisonOptions {
         band: (f_min, f_max),
-        time_offset: 0.0,
         floor_fraction: floor,
+        ..ComparisonOptions::new(stft)
     };
-    let cmp = py
-        .detach(|| compare_records(&x, Some(&y), &opts))
-        .map_err(value_error)?;
+    // Ctrl-C stops it (KeyboardInterrupt), as `spectrogram`
+    let cmp = crate::interrupt::run(py, None, "compare_spectrograms", |cancel, _| {
+        opts.cancel = cancel;
+        compare_records(&x, Some(&y), &opts)
+    })?
+    .map_err(value_error)?;
     let run = nlsdof_report::spectrogram::SpectrogramRun {
         label: "measured",
         input: "measured",

@@ -44,13 +44,20 @@ pub fn decay<'py>(
     let a = f64_array(x, "x")?;
     let x = values(&a);
     let band = crate::convert::pair(band, "band")?;
-    let opts = DecayOptions {
+    let mut opts = DecayOptions {
         t_start,
         band,
         bins,
+        ..DecayOptions::default()
     };
     let t_an = Instant::now();
-    let r = py.detach(|| analyse(&x, fs, &opts)).map_err(value_error)?;
+    // Ctrl-C stops it (KeyboardInterrupt): the analysis polls the flag
+    // between FFT blocks, amplitude bins and pieces of the model's decay
+    let r = crate::interrupt::run(py, None, "decay", |cancel, _| {
+        opts.cancel = cancel;
+        analyse(&x, fs, &opts)
+    })?
+    .map_err(value_error)?;
     let analyse_s = t_an.elapsed().as_secs_f64();
     let rec = nlsdof_report::decay::DecayRecord {
         input: "",

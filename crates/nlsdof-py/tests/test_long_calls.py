@@ -92,6 +92,60 @@ def test_ctrl_c_stops_a_long_simulation_within_half_a_second():
         assert 0.0 <= latency < 0.5, name
 
 
+# Calls sized to take several seconds (on 2 shared cores), each stopped by
+# SIGINT 0.5 s in (issue 27 item 5: every call longer than a second).
+LONG_CALLS = {
+    # a 4e6-sample free decay (20 Hz, fs 10 kHz): spectrum, envelope,
+    # analytic signal, bins, the fitted model's simulated decay
+    "decay": (
+        """
+        t = np.arange(4_000_000) / 10_000.0
+        x = np.exp(-0.008 * t) * np.cos(2 * np.pi * 20.0 * t * (1 + 0.002 * np.exp(-0.008 * t)))
+        """,
+        "nlsdof.decay(x, fs=10_000.0)",
+    ),
+    # vector fitting of a 12-mode FRF, 8000 lines, order search to 24 pairs
+    "linear_id": (
+        """
+        f = np.linspace(1.0, 200.0, 8_000); s = 2j * np.pi * f
+        h = sum(1.0 / (s**2 + 2 * 0.02 * wn * s + wn**2) for wn in 2 * np.pi * np.linspace(10, 190, 12))
+        h = h * (1 + 0.01 * np.random.default_rng(1).standard_normal(f.size))
+        """,
+        "nlsdof.linear_id(f, h, max_poles=24, max_iterations=200)",
+    ),
+    # an STFT with a prime FFT length (Bluestein), ~240 segments
+    "spectrogram": (
+        """
+        x = np.sin(0.01 * np.arange(12_000_000)) + 0.1 * np.random.default_rng(2).standard_normal(12_000_000)
+        """,
+        "nlsdof.spectrogram(x, fs=1000.0, segments=120, nfft=200_003)",
+    ),
+    "compare_spectrograms": (
+        """
+        x = np.sin(0.01 * np.arange(12_000_000)) + 0.1 * np.random.default_rng(2).standard_normal(12_000_000)
+        """,
+        "nlsdof.compare_spectrograms(x, 1.01 * x, fs=1000.0, segments=60, nfft=200_003)",
+    ),
+    # Dormand-Prince at the reference tolerances, restarted at every sample
+    "simulate(method='dopri')": (
+        f"""
+        m = nlsdof.Model.from_toml({str(ROOT / "examples" / "har-wing.toml")!r})
+        fs = 2000.0
+        u = 0.5 * np.sin(2 * np.pi * 5.4 * np.arange(5_000_000) / fs)
+        """,
+        'm.simulate(u, fs, method="dopri")',
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(LONG_CALLS))
+def test_ctrl_c_stops_every_long_call_within_half_a_second(name):
+    setup, call = LONG_CALLS[name]
+    latency = interrupt_latency(setup, call, after=0.5)
+    print(f"{name}: KeyboardInterrupt {latency:.3f} s after SIGINT")
+    assert 0.0 <= latency < 0.5, (name, latency)
+
+
 def test_progress_is_reported_and_changes_nothing():
     cols = wing_data()
     plain = nlsdof.fit(cols, "duffing-generalised")
@@ -140,3 +194,56 @@ def test_one_interval_per_parameter_named_by_its_method():
     assert nlsdof.fit(cols, "duffing-generalised", intervals="all").report() == every
     with pytest.raises(ValueError, match="intervals"):
         nlsdof.fit(cols, "duffing-generalised", intervals="some")
+
+
+def test_report_shows_the_profile_interval_once_computed():
+    # issue 27 item 6: one interval per parameter, the output-error profile
+    # where computed, else Wald (the CLI's `fit --profile --intervals one`);
+    # FitResult.report() used to ignore a profile() it had computed
+    import pickle
+
+    cols = wing_data()
+    r = nlsdof.fit(cols, "duffing-generalised")
+    fresh = nlsdof.fit(cols, "duffing-generalised")
+
+    def row(text, name):
+        rows = [line for line in text.splitlines() if line.split()[:1] == [name]]
+        assert len(rows) == 1, (name, text)
+        return rows[0]
+
+    def bounds(ci):
+        # as the report prints them: Rust's {:.6e} (2.579969e0), "open"
+        def f(v):
+            if v is None:
+                return "open"
+            mantissa, exponent = f"{v:.6e}".split("e")
+            return f"{mantissa}e{int(exponent)}"
+
+        return f"[{f(ci[0])}, {f(ci[1])}]"
+
+    wald = {p["name"]: p["ci95"] for p in r.to_dict()["parameters"]}
+    before = r.report()
+    assert f"{bounds(wald['eta'])} Wald" in row(before, "eta")
+    prof = r.profile("eta")
+    assert prof["refused"] is None, prof["refused"]
+    lo, hi = prof["ci95"]
+    assert lo is not None and lo <= prof["estimate"] and (hi is None or prof["estimate"] <= hi)
+    text = r.report()
+    eta = row(text, "eta")
+    # the profile's own bounds, labelled with its method, instead of Wald
+    assert f"{bounds(prof['ci95'])} output-error profile" in eta, eta
+    assert bounds(wald["eta"]) not in eta and "Wald" not in eta
+    # the other parameters keep their Wald rows, unchanged
+    for name in ("alpha", "delta", "beta", "kappa"):
+        assert row(text, name) == row(before, name), name
+    # to_dict(): the chosen interval and its method, as `fit --profile --json`
+    chosen = {p["name"]: p["interval"] for p in r.to_dict()["parameters"]}
+    assert chosen["eta"] == {"ci95": prof["ci95"], "method": "output-error profile"}
+    assert chosen["kappa"]["method"] == "Wald"
+    # kept across pickling; a result without a profile stays on Wald
+    back = pickle.loads(pickle.dumps(r))
+    assert back.report() == text
+    assert fresh.report() == before
+    # profiling again replaces (not adds) the entry
+    again = r.profile("eta")
+    assert again == prof and r.report() == text

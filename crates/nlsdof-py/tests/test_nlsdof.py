@@ -886,7 +886,9 @@ def test_the_readme_beam_loop_runs_and_reproduces_the_fit(tmp_path):
     code = code.replace('"../shared/', '"' + str(ROOT.parent / "shared") + "/")
     check = (
         "\nimport numpy as np\n"
-        "assert np.array_equal(s.amplitude, curves[curves.level == level].model_amplitude.to_numpy())\n"
+        "assert np.array_equal(s.amplitude, m.sweep(gamma, np.linspace(120.0, 210.0, 901), sweep).amplitude)\n"
+        "own = curves[curves.level == level]\n"
+        "assert np.array_equal(r.predict(gamma, own.f_hz.to_numpy(), sweep).amplitude, own.model_amplitude.to_numpy())\n"
         "again = pickle.load(open('beam_fit.pkl', 'rb'))\n"
         "assert again == r and again.model == m\n"
         "print('LOOP OK')\n"

@@ -130,7 +130,7 @@ def test_the_plots_example_draws_every_figure(tmp_path):
         timeout=900,
     )
     assert r.returncode == 0, r.stderr
-    for name in ("fit", "landscape", "decay", "fit_time", "linear_id", "spectrogram"):
+    for name in ("fit", "landscape", "decay", "fit_time", "linear_id", "spectrogram", "report_plots"):
         p = tmp_path / f"{name}.png"
         assert p.is_file() and p.read_bytes().startswith(b"\x89PNG"), name
 

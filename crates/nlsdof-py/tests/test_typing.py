@@ -52,6 +52,7 @@ from typing_extensions import assert_type
 
 import nlsdof
 import nlsdof.plot
+from nlsdof._report import Report
 
 m = nlsdof.Model(1.0, 100.0, 0.5, nonlinear_stiffness=(1e3, 3.0))
 assert_type(m, nlsdof.Model)
@@ -86,13 +87,24 @@ assert_type(r.model, nlsdof.Model)
 assert_type(r.predict([1.0, 2.0], [1.0, 2.0]), list[nlsdof.Sweep])
 assert_type(nlsdof.plot.fit(r), Any)
 assert_type(nlsdof.spectrogram(np.zeros(64), fs=8.0).magnitude, NDArray[np.float64])
-assert_type(nlsdof.fit_time(np.zeros(8), np.zeros(8), 8.0), dict[str, Any])
+assert_type(nlsdof.fit_time(np.zeros(8), np.zeros(8), 8.0), Report)
+# the documents with a figure are Reports: a dict with plot() (issue 27)
+d = nlsdof.decay(np.zeros(8), 8.0)
+assert_type(d, Report)
+assert_type(d.plot(np.zeros(8)), Any)
+assert_type(d["adequate"], Any)
+doc: dict[str, Any] = d
+assert_type(nlsdof.fit_time(np.zeros(8), np.zeros(8), 8.0).plot(np.zeros(8)), Any)
+assert_type(nlsdof.linear_id([1.0, 2.0], [1.0, 2.0]), Report)
+assert_type(nlsdof.linear_id([1.0, 2.0], [1.0, 2.0]).plot(what="phase"), Any)
+assert_type(nlsdof.inspect(data), Report)
+assert_type(nlsdof.compare_spectrograms(np.zeros(8), np.zeros(8), 8.0), dict[str, Any])
 assert_type(nlsdof.read_uff("a.uff"), list[dict[str, Any]])
 assert_type(nlsdof.read_lvm("a.lvm", columns=["X_Value"]), dict[str, NDArray[np.float64]])
 assert_type(nlsdof.read_mat("a.mat"), dict[str, NDArray[np.float64]])
 assert_type(nlsdof.read_polytec_sweep("f.txt"), list[dict[str, NDArray[np.float64]]])
-assert_type(nlsdof.frf_estimate(np.zeros(8), np.zeros(8), fs=8.0), dict[str, Any])
-assert_type(nlsdof.compare(data, models=["linear", "duffing"]), dict[str, Any])
+assert_type(nlsdof.frf_estimate(np.zeros(8), np.zeros(8), fs=8.0), Report)
+assert_type(nlsdof.compare(data, models=["linear", "duffing"]), Report)
 assert_type(nlsdof.signal("sine", amplitude=1.0, fs=8.0, freq=1.0, duration=1.0)["t"], NDArray[np.float64])
 assert_type(nlsdof.g(2.0), float)
 assert_type(nlsdof.__version__, str)
@@ -103,6 +115,7 @@ nlsdof.fit(data, mass="1")  # type: ignore[arg-type]
 m.mass = 2.0  # type: ignore[misc]
 r.cost_function  # type: ignore[attr-defined]
 nlsdof.read_uff("a.uff", dataset=1.5)  # type: ignore[arg-type]
+d.plott()  # type: ignore[attr-defined]
 '''
 
 

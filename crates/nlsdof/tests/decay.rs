@@ -336,6 +336,7 @@ fn fuzz_decay_analysis() {
                 (a, a + rnd() * (fs / 2.0 - a))
             }),
             bins: 4 + (rnd() * 60.0) as usize,
+            ..DecayOptions::default()
         };
         match analyse(&x, fs, &opts) {
             Ok(r) => {

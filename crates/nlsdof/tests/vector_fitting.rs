@@ -590,3 +590,44 @@ fn matches_the_numpy_reference() {
     }
     assert_eq!(cases, 2);
 }
+
+/// A set cancel flag ends vector fitting, the order search and the SDoF
+/// identification with the typed error, never a fit (issue 27: Ctrl-C);
+/// the same FRF without the flag is fitted.
+#[test]
+fn a_cancelled_fit_ends_with_interrupted() {
+    use nlsdof::cancel::{Cancel, Interrupted};
+    use nlsdof::vector_fitting::{identify_sdof, MeasuredFrf, SdofIdError, SdofIdOptions};
+    use std::sync::atomic::AtomicBool;
+    static STOP: AtomicBool = AtomicBool::new(true);
+    let m = Mode {
+        f_hz: 10.0,
+        zeta: 0.02,
+        a: 1.0,
+    };
+    let w = grid(5.0, 15.0, 200);
+    let h: Vec<C64> = w.iter().map(|&w| m.h(w)).collect();
+    let opts = VfOptions {
+        cancel: Cancel::new(&STOP),
+        ..VfOptions::default()
+    };
+    assert_eq!(
+        vector_fit(&w, &h, &opts),
+        Err(VectorFitError::Interrupted(Interrupted))
+    );
+    assert_eq!(
+        fit_auto(&w, &h, &opts, 4, 0.9),
+        Err(VectorFitError::Interrupted(Interrupted))
+    );
+    let frf = MeasuredFrf::complex(w.clone(), h.clone());
+    let sdof = SdofIdOptions {
+        cancel: Cancel::new(&STOP),
+        ..SdofIdOptions::default()
+    };
+    assert!(matches!(
+        identify_sdof(&frf, &sdof),
+        Err(SdofIdError::Fit(VectorFitError::Interrupted(Interrupted)))
+    ));
+    assert!(vector_fit(&w, &h, &VfOptions::default()).is_ok());
+    assert!(identify_sdof(&frf, &SdofIdOptions::default()).is_ok());
+}

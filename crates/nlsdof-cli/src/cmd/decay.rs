@@ -170,6 +170,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         t_start: a.t_start.map(|t| t - t0),
         band,
         bins: a.bins,
+        // Ctrl-C ends the process (main's handler): nothing to poll here
+        ..DecayOptions::default()
     };
     let t_an = Instant::now();
     let r = analyse(&x, fs, &opts)

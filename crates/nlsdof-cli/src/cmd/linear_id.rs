@@ -204,6 +204,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
             WeightArg::Inverse => FrfWeighting::Inverse,
         },
         max_iterations: args.max_iterations,
+        // Ctrl-C ends the process (main's handler): nothing to poll here
+        cancel: nlsdof::cancel::Cancel::NEVER,
     };
     let id = identify_sdof(&frf, &opts).map_err(|e| match e {
         SdofIdError::EmptyBand { .. } => usage(format!("no FRF point in [{f_lo}, {f_hi}] Hz")),

@@ -335,6 +335,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         band: (a.fmin, a.fmax),
         time_offset: measured.t0,
         floor_fraction: a.floor,
+        // Ctrl-C ends the process (main's handler): nothing to poll here
+        cancel: nlsdof::cancel::Cancel::NEVER,
     };
     let cmp = with_spinner("computing spectrograms", || {
         compare_records(

@@ -6,7 +6,9 @@ Conventions: arguments read as numpy arrays accept anything
 ``numpy.asarray(x, dtype=float64)`` accepts (``ArrayLike``); option strings
 are typed ``str`` (they are case-insensitive at run time, so a ``Literal``
 would reject valid calls); the JSON-like documents of the CLI's ``--json``
-are ``dict[str, Any]``. pandas and matplotlib are optional extras, so
+are ``dict[str, Any]``, or ``nlsdof._report.Report`` (a ``dict[str, Any]``
+with ``plot()`` and ``_repr_html_``) where the call returns one: ``decay``,
+``fit_time``, ``linear_id``, ``inspect``, ``frf_estimate``, ``compare``. pandas and matplotlib are optional extras, so
 DataFrames and Axes are ``Any``.
 """
 
@@ -16,6 +18,8 @@ from typing import Any, ClassVar, Protocol, final, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from ._report import Report
 
 __all__ = [
     "g",
@@ -517,7 +521,7 @@ def linear_id(
     proportional: bool = False,
     weight: str = "uniform",
     max_iterations: int = 30,
-) -> dict[str, Any]: ...
+) -> Report: ...
 def spectrogram(
     x: ArrayLike,
     fs: float,
@@ -552,7 +556,7 @@ def decay(
     t_start: float | None = None,
     band: Sequence[float] | None = None,
     bins: int = 30,
-) -> dict[str, Any]: ...
+) -> Report: ...
 def fit_time(
     u: ArrayLike,
     y: ArrayLike,
@@ -566,8 +570,8 @@ def fit_time(
     input_interpolation: str = "cubic",
     substeps: int | None = None,
     progress: _Progress = None,
-) -> dict[str, Any]: ...
-def inspect(data: _Data, phase: str = "auto", min_jump_ratio: float = 1.2) -> dict[str, Any]: ...
+) -> Report: ...
+def inspect(data: _Data, phase: str = "auto", min_jump_ratio: float = 1.2) -> Report: ...
 def read_uff(
     path: _Path, dataset: int | str | None = None, headers_only: bool = False
 ) -> list[dict[str, Any]]: ...
@@ -603,7 +607,7 @@ def frf_estimate(
     f_min: float | None = None,
     f_max: float | None = None,
     out: _Path | None = None,
-) -> dict[str, Any]:
+) -> Report:
     """`nlsdof frf-estimate --json`, plus `f_hz`, `frf` and `coherence` arrays."""
 
 def compare(
@@ -616,7 +620,7 @@ def compare(
     mass: float | None = None,
     sign: str = "data",
     progress: Any = None,
-) -> dict[str, Any]:
+) -> Report:
     """`nlsdof compare --json`: `{"models": [document, ...]}`."""
 
 def signal(

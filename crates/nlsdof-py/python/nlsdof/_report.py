@@ -139,9 +139,11 @@ def _scalars(doc: dict[str, Any]) -> list[tuple[str, Any, str, str]]:
     ]
 
 
-class Report(dict):  # type: ignore[type-arg]
+class Report(dict[str, Any]):
     """A document (dict) of `kind` ("decay", "fit_time", "linear_id",
-    "inspect", "frf_estimate", "compare") that Jupyter shows as a table."""
+    "inspect", "frf_estimate", "compare") that Jupyter shows as a table.
+    What ``nlsdof.decay``, ``fit_time``, ``linear_id``, ``inspect``,
+    ``frf_estimate`` and ``compare`` return (typed so in the stubs)."""
 
     kind: str
 

@@ -50,6 +50,7 @@ use super::levenberg_marquardt::{
 };
 use super::time_domain::{simulate_states, Discretisation, TimeModel};
 use super::uncertainty::t95;
+use crate::cancel::{Cancel, Interrupted};
 use crate::model::NormalisedModel;
 use crate::power_law::g_unchecked;
 use crate::simulation::State;
@@ -83,6 +84,9 @@ pub enum DecayError {
     NotADecay { rising: usize, bins: usize },
     #[error("not a free decay of an oscillator: the backbone fit gives omega^2 = alpha = {alpha} 1/s^2 at zero amplitude (must be > 0)")]
     NoOscillator { alpha: f64 },
+    /// Cancelled through [`DecayOptions::cancel`]: no result.
+    #[error(transparent)]
+    Interrupted(#[from] Interrupted),
 }
 
 /// Range of both exponents (ρ of the backbone, η of the damping curve):
@@ -103,6 +107,10 @@ pub struct DecayOptions {
     pub band: Option<(f64, f64)>,
     /// Amplitude bins of the backbone.
     pub bins: usize,
+    /// Polled between the FFT blocks, the amplitude bins and the pieces of
+    /// the model's free decay: once set, [`analyse`] ends with
+    /// [`DecayError::Interrupted`] ([`crate::cancel`]).
+    pub cancel: Cancel,
 }
 
 impl Default for DecayOptions {
@@ -111,6 +119,7 @@ impl Default for DecayOptions {
             t_start: None,
             band: None,
             bins: 30,
+            cancel: Cancel::NEVER,
         }
     }
 }
@@ -215,7 +224,14 @@ fn band_weight(k: usize, len: usize, df: f64, band: (f64, f64), edge: f64) -> f6
 /// filter's impulse response falls off as `1/t³` beyond `fs/edge`, so the
 /// blocks differ from the single FFT only by that tail (relative 1e-6 or
 /// less of the envelope).
-fn analytic_pieces(x: &[f64], fs: f64, band: (f64, f64), out: &mut dyn FnMut(&[Complex<f64>])) {
+/// `cancel` is polled before each block.
+fn analytic_pieces(
+    x: &[f64],
+    fs: f64,
+    band: (f64, f64),
+    cancel: Cancel,
+    out: &mut dyn FnMut(&[Complex<f64>]),
+) -> Result<(), Interrupted> {
     let n = x.len();
     let zero = Complex::new(0.0, 0.0);
     let mean = x.iter().sum::<f64>() / n.max(1) as f64;
@@ -250,6 +266,7 @@ fn analytic_pieces(x: &[f64], fs: f64, band: (f64, f64), out: &mut dyn FnMut(&[C
     let df = fs / len as f64;
     let mut s = 0;
     while s < n {
+        cancel.check()?;
         // samples s - lead .. s - lead + len, zero outside the record
         for (j, c) in buf.iter_mut().enumerate() {
             *c = match (s + j).checked_sub(lead) {
@@ -265,13 +282,15 @@ fn analytic_pieces(x: &[f64], fs: f64, band: (f64, f64), out: &mut dyn FnMut(&[C
         out(&buf[lead..lead + keep.min(n - s)]);
         s += keep;
     }
+    Ok(())
 }
 
 /// Analytic signal of `x` (mean removed) restricted to the band `[f1, f2]` Hz
 /// (see [`analytic_pieces`] for records longer than 2^19 samples).
 pub fn analytic_signal(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>> {
     let mut z = Vec::with_capacity(x.len());
-    analytic_pieces(x, fs, band, &mut |p| z.extend_from_slice(p));
+    analytic_pieces(x, fs, band, Cancel::NEVER, &mut |p| z.extend_from_slice(p))
+        .expect("never cancelled");
     z
 }
 
@@ -287,7 +306,8 @@ pub fn analytic_signal(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>
 /// twiddles, `n1` FFTs of `n2` points), which needs one `h`-point
 /// intermediate and small plans; the last FFTs give `Z` column by column,
 /// and each bin's power is taken there, never stored.
-fn peak_frequency(x: &[f64], fs: f64) -> f64 {
+/// `cancel` is polled every 64 of the small FFTs.
+fn peak_frequency(x: &[f64], fs: f64, cancel: Cancel) -> Result<f64, Interrupted> {
     let n = x.len();
     let m = n.next_power_of_two().max(4);
     let h = m / 2;
@@ -310,6 +330,9 @@ fn peak_frequency(x: &[f64], fs: f64) -> f64 {
     // step 1: a[j2 n1 + k1] = w_h^(j2 k1) FFT_n1(p[n2 j1 + j2] over j1)[k1]
     let mut a = vec![zero; h];
     for j2 in 0..n2 {
+        if j2 % 64 == 0 {
+            cancel.check()?;
+        }
         let row = &mut a[j2 * n1..(j2 + 1) * n1];
         for (j1, c) in row.iter_mut().enumerate() {
             let j = n2 * j1 + j2;
@@ -330,6 +353,9 @@ fn peak_frequency(x: &[f64], fs: f64) -> f64 {
     let (mut c, mut d) = (Vec::with_capacity(n2), Vec::with_capacity(n2));
     let mut best = (1, f64::NEG_INFINITY);
     for k1 in 0..=n1 / 2 {
+        if k1 % 32 == 0 {
+            cancel.check()?;
+        }
         let k1r = (n1 - k1) % n1;
         column(k1, &mut c, &mut scratch);
         column(k1r, &mut d, &mut scratch);
@@ -357,7 +383,7 @@ fn peak_frequency(x: &[f64], fs: f64) -> f64 {
             }
         }
     }
-    best.0 as f64 * fs / m as f64
+    Ok(best.0 as f64 * fs / m as f64)
 }
 
 /// `y = c0 + c1 · φ(a)` over a grid of the exponent `p` with `φ = g(p) s^p`,
@@ -522,10 +548,12 @@ fn fit_power(
 }
 
 /// Envelope `|z|` of the analytic signal (no complex copy of the record).
-fn envelope(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<f64> {
+fn envelope(x: &[f64], fs: f64, band: (f64, f64), cancel: Cancel) -> Result<Vec<f64>, Interrupted> {
     let mut env = Vec::with_capacity(x.len());
-    analytic_pieces(x, fs, band, &mut |p| env.extend(p.iter().map(|c| c.norm())));
-    env
+    analytic_pieces(x, fs, band, cancel, &mut |p| {
+        env.extend(p.iter().map(|c| c.norm()))
+    })?;
+    Ok(env)
 }
 
 /// The model's simulated free decay from `(x0, 0)`: `n` samples of
@@ -533,18 +561,29 @@ fn envelope(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<f64> {
 /// each started from the state the previous one ended in. The steps are
 /// those of one call (the input is zero throughout and the state carries
 /// over exactly), without an `n`-sample zero input and its upsampled copy
-/// in memory (issue 30, class 10). `None` if the simulation fails.
-fn free_decay(tm: &TimeModel, n: usize, fs: f64, x0: f64) -> Option<Vec<f64>> {
+/// in memory (issue 30, class 10). `None` if the simulation fails;
+/// `cancel` is polled before each piece.
+fn free_decay(
+    tm: &TimeModel,
+    n: usize,
+    fs: f64,
+    x0: f64,
+    cancel: Cancel,
+) -> Result<Option<Vec<f64>>, Interrupted> {
     const PIECE: usize = 1 << 16;
     let zeros = vec![0.0; PIECE + 1];
     let mut y = Vec::with_capacity(n);
     let mut state = State { x: x0, v: 0.0 };
     while y.len() < n {
+        cancel.check()?;
         let k = (n - y.len()).min(PIECE);
         // one sample more than kept, except at the end: the next start
         let steps = if y.len() + k < n { k + 1 } else { k };
-        let (ys, vs) =
-            simulate_states(tm, &zeros[..steps], fs, state, &Discretisation::default()).ok()?;
+        let Ok((ys, vs)) =
+            simulate_states(tm, &zeros[..steps], fs, state, &Discretisation::default())
+        else {
+            return Ok(None);
+        };
         y.extend_from_slice(&ys[..k]);
         if steps > k {
             state = State {
@@ -553,7 +592,7 @@ fn free_decay(tm: &TimeModel, n: usize, fs: f64, x0: f64) -> Option<Vec<f64>> {
             };
         }
     }
-    Some(y)
+    Ok(Some(y))
 }
 
 /// The free-decay analysis of a record `x` sampled at `fs` (see the module
@@ -592,7 +631,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     let band = match opts.band {
         Some(b) => b,
         None => {
-            let fp = peak_frequency(seg0, fs);
+            let fp = peak_frequency(seg0, fs, opts.cancel)?;
             (0.5 * fp, (1.5 * fp).min(nyquist))
         }
     };
@@ -609,7 +648,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
                     min: 2 * trim + 64,
                 });
             }
-            let env = envelope(x, fs, band);
+            let env = envelope(x, fs, band, opts.cancel)?;
             let inner = &env[trim..n - trim];
             let max = inner.iter().cloned().fold(0.0, f64::max);
             trim + inner.iter().rposition(|&a| a >= 0.95 * max).unwrap_or(0)
@@ -620,7 +659,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     let trim = ((3.0 / fc).max(2.0 / (band.1 - band.0)) * fs).ceil() as usize;
     if seg.len() < 2 * trim + 64 && given_start.is_none() {
         // the envelope is near its maximum until the end: no decay
-        let env = envelope(x, fs, band);
+        let env = envelope(x, fs, band, opts.cancel)?;
         return Err(DecayError::NoDecay {
             start: env[n / 2],
             end: env[n - 1 - trim.min(n / 4)],
@@ -636,10 +675,10 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     // piece by piece, no complex copy of the record (issue 30, class 10)
     let mut amp_all = Vec::with_capacity(seg.len());
     let mut phase = Vec::with_capacity(seg.len());
-    analytic_pieces(seg, fs, band, &mut |p| {
+    analytic_pieces(seg, fs, band, opts.cancel, &mut |p| {
         amp_all.extend(p.iter().map(|c| c.norm()));
         phase.extend(p.iter().map(|c| c.arg()));
-    });
+    })?;
     // analysed range: after the leading trim, until the envelope reaches
     // 3x the noise floor (median of the last 10 %) or the trailing trim
     let tail = &amp_all[amp_all.len() - amp_all.len() / 10..];
@@ -699,6 +738,7 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
     let (la, lb) = (amin.ln(), amax.ln());
     let mut backbone = Vec::new();
     for b in 0..nb {
+        opts.cancel.check()?;
         let lo = (la + (lb - la) * b as f64 / nb as f64).exp();
         let hi = (la + (lb - la) * (b + 1) as f64 / nb as f64).exp();
         // the bin's samples, in order, in two passes (means, then the
@@ -786,16 +826,16 @@ pub fn analyse(x: &[f64], fs: f64, opts: &DecayOptions) -> Result<DecayAnalysis,
             input_offset: 0.0,
             output_offset: 0.0,
         };
-        if let Some(sim) = free_decay(&tm, len + 2 * trim, fs, res.amplitude[0]) {
+        if let Some(sim) = free_decay(&tm, len + 2 * trim, fs, res.amplitude[0], opts.cancel)? {
             // pad before the start with the same oscillation backwards is
             // not available: analyse the simulated decay from its start and
             // compare from sample 0 (the simulated decay starts at a0);
             // only the first `len` samples of its envelope are kept
             let mut m = Vec::with_capacity(len);
-            analytic_pieces(&sim, fs, band, &mut |p| {
+            analytic_pieces(&sim, fs, band, opts.cancel, &mut |p| {
                 let k = (len - m.len()).min(p.len());
                 m.extend(p[..k].iter().map(|c| c.norm()));
-            });
+            })?;
             drop(sim);
             let scale = res.amplitude.iter().cloned().fold(0.0, f64::max);
             let skip = trim.min(len / 4);
@@ -874,10 +914,11 @@ mod tests {
         let reference = one_fft_analytic(&x, fs, band);
         let mut pieces = 0;
         let mut z = Vec::new();
-        analytic_pieces(&x, fs, band, &mut |p| {
+        analytic_pieces(&x, fs, band, Cancel::NEVER, &mut |p| {
             pieces += 1;
             z.extend_from_slice(p)
-        });
+        })
+        .unwrap();
         assert!(pieces > 1, "{pieces} piece(s)");
         assert_eq!(z.len(), n);
         let scale = reference.iter().fold(0.0f64, |a, c| a.max(c.norm()));
@@ -907,7 +948,11 @@ mod tests {
             let k = (1..m / 2)
                 .max_by(|&a, &b| buf[a].norm_sqr().total_cmp(&buf[b].norm_sqr()))
                 .unwrap();
-            assert_eq!(peak_frequency(&x, fs), k as f64 * fs / m as f64, "{n}");
+            assert_eq!(
+                peak_frequency(&x, fs, Cancel::NEVER).unwrap(),
+                k as f64 * fs / m as f64,
+                "{n}"
+            );
         }
     }
 
@@ -934,7 +979,35 @@ mod tests {
             State { x: 0.8, v: 0.0 },
         )
         .unwrap();
-        assert_eq!(free_decay(&tm, n, fs, 0.8).unwrap(), one);
+        let pieces = free_decay(&tm, n, fs, 0.8, Cancel::NEVER).unwrap();
+        assert_eq!(pieces.unwrap(), one);
+    }
+
+    /// A set flag ends the analysis with the typed error, not a result
+    /// (issue 27: Ctrl-C); the same record without it is analysed.
+    #[test]
+    fn a_cancelled_analysis_ends_with_interrupted() {
+        use std::sync::atomic::AtomicBool;
+        static STOP: AtomicBool = AtomicBool::new(true);
+        let x = decaying_sine(20_000, 1000.0, 20.0, 0.3);
+        let opts = DecayOptions {
+            cancel: Cancel::new(&STOP),
+            ..DecayOptions::default()
+        };
+        assert!(matches!(
+            analyse(&x, 1000.0, &opts),
+            Err(DecayError::Interrupted(Interrupted))
+        ));
+        let given = DecayOptions {
+            t_start: Some(0.0),
+            band: Some((10.0, 30.0)),
+            ..opts
+        };
+        assert!(matches!(
+            analyse(&x, 1000.0, &given),
+            Err(DecayError::Interrupted(Interrupted))
+        ));
+        assert!(analyse(&x, 1000.0, &DecayOptions::default()).is_ok());
     }
 
     #[test]

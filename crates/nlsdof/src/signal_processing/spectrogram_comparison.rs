@@ -19,7 +19,10 @@
 //! # Ok::<(), nlsdof::signal_processing::spectrogram_comparison::ComparisonError>(())
 //! ```
 
-use super::stft::{self, compare, spectrogram, Spectrogram, SpectrogramDifference, StftOptions};
+use super::stft::{
+    self, compare, spectrogram_cancellable, Spectrogram, SpectrogramDifference, StftOptions,
+};
+use crate::cancel::Cancel;
 use thiserror::Error;
 
 /// Options of [`compare_records`].
@@ -34,6 +37,9 @@ pub struct ComparisonOptions {
     /// Bins below this fraction of the measured maximum are left out of the
     /// robust Eq 33 (see [`stft::compare`]).
     pub floor_fraction: f64,
+    /// Polled before each STFT segment: once set, [`compare_records`] ends
+    /// with [`stft::StftError::Interrupted`] ([`crate::cancel`]).
+    pub cancel: Cancel,
 }
 
 impl ComparisonOptions {
@@ -44,6 +50,7 @@ impl ComparisonOptions {
             band: (None, None),
             time_offset: 0.0,
             floor_fraction: 0.01,
+            cancel: Cancel::NEVER,
         }
     }
 }
@@ -78,9 +85,9 @@ pub fn compare_records(
     model: Option<&[f64]>,
     opts: &ComparisonOptions,
 ) -> Result<SpectrogramComparison, ComparisonError> {
-    let s_meas = spectrogram(measured, &opts.stft)?;
+    let s_meas = spectrogram_cancellable(measured, &opts.stft, opts.cancel)?;
     let s_model = match model {
-        Some(m) => Some(spectrogram(m, &opts.stft)?),
+        Some(m) => Some(spectrogram_cancellable(m, &opts.stft, opts.cancel)?),
         None => None,
     };
     let last = *s_meas.frequencies.last().unwrap_or(&0.0);
@@ -115,4 +122,38 @@ pub fn compare_records(
         difference,
         band: restrict.then_some(band),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cancel::Interrupted;
+
+    /// A set flag ends the comparison with the typed error (issue 27:
+    /// Ctrl-C); without it the same records are compared.
+    #[test]
+    fn a_cancelled_comparison_ends_with_interrupted() {
+        use std::sync::atomic::AtomicBool;
+        static STOP: AtomicBool = AtomicBool::new(true);
+        let fs = 64.0;
+        let x: Vec<f64> = (0..4096)
+            .map(|i| (std::f64::consts::TAU * 5.0 * i as f64 / fs).sin())
+            .collect();
+        let opts = ComparisonOptions {
+            cancel: Cancel::new(&STOP),
+            ..ComparisonOptions::new(StftOptions::paper(x.len(), fs))
+        };
+        assert_eq!(
+            compare_records(&x, Some(&x), &opts),
+            Err(ComparisonError::Stft(stft::StftError::Interrupted(
+                Interrupted
+            )))
+        );
+        assert_eq!(
+            stft::spectrogram_cancellable(&x, &opts.stft, opts.cancel),
+            Err(stft::StftError::Interrupted(Interrupted))
+        );
+        let free = ComparisonOptions::new(StftOptions::paper(x.len(), fs));
+        assert!(compare_records(&x, Some(&x), &free).is_ok());
+    }
 }

@@ -86,6 +86,7 @@
 //! resolution), so the values no longer match scipy/MATLAB bin for bin.
 
 use super::{Symmetry, Window};
+use crate::cancel::Cancel;
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use thiserror::Error;
@@ -134,6 +135,9 @@ impl Scaling {
 pub enum StftError {
     #[error("the signal is empty: a spectrogram needs samples")]
     Empty,
+    /// Cancelled through the flag of [`spectrogram_cancellable`]: no result.
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
     #[error("sample {index} of the signal is {value}: samples must be finite")]
     NotFinite { index: usize, value: f64 },
     #[error("sample rate {sample_rate} Hz must be finite and > 0")]
@@ -407,6 +411,17 @@ pub fn next_fast_len(n: usize) -> usize {
 /// the scaling). Errors: empty or non-finite signal, bad options, signal
 /// shorter than one segment.
 pub fn spectrogram(x: &[f64], opts: &StftOptions) -> Result<Spectrogram, StftError> {
+    spectrogram_cancellable(x, opts, Cancel::NEVER)
+}
+
+/// As [`spectrogram`], polling `cancel` before each segment: once it is
+/// set the remaining segments are skipped and the call ends with
+/// [`StftError::Interrupted`] ([`crate::cancel`]).
+pub fn spectrogram_cancellable(
+    x: &[f64],
+    opts: &StftOptions,
+    cancel: Cancel,
+) -> Result<Spectrogram, StftError> {
     let lay = opts.layout(x.len())?;
     if let Some((index, &value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(StftError::NotFinite { index, value });
@@ -437,6 +452,9 @@ pub fn spectrogram(x: &[f64], opts: &StftOptions) -> Result<Spectrogram, StftErr
             )
         },
         |(input, output, scratch), (m, row)| {
+            if cancel.is_cancelled() {
+                return;
+            }
             let seg = &x[m * hop..m * hop + l];
             let mean = match detrend {
                 Detrend::None => 0.0,
@@ -461,6 +479,7 @@ pub fn spectrogram(x: &[f64], opts: &StftOptions) -> Result<Spectrogram, StftErr
             }
         },
     );
+    cancel.check()?;
     Ok(Spectrogram {
         frequencies: (0..n_freq).map(|k| k as f64 * fs / nfft as f64).collect(),
         times: (0..lay.n_segments)

@@ -6,6 +6,7 @@
 use super::coulomb::{self, breakaway, illinois, Mode};
 use super::law::{dispatch, Dyn, Law, Visit};
 use super::{is_coulomb, Options, Sample, SimulationError, State, Summary};
+use crate::cancel::Cancel;
 use crate::excitation::{Excitation, SampledInput};
 use crate::model::NormalisedModel;
 
@@ -324,8 +325,13 @@ struct SampledRun<'i, 'a, F> {
     rtol: f64,
     atol: f64,
     opts: Options,
+    cancel: Cancel,
     sink: F,
 }
+
+/// Samples between two polls of the cancel flag in a Dormand–Prince run
+/// (a few ms of work at the reference tolerances).
+const CANCEL_EVERY: usize = 1 << 12;
 
 impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
     type Out = Result<Summary, SimulationError>;
@@ -336,6 +342,7 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
             rtol,
             atol,
             opts,
+            cancel,
             mut sink,
         } = self;
         let n = input.len();
@@ -365,6 +372,9 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
         });
         let mut left = opts.decimation;
         for i in 1..n {
+            if i % CANCEL_EVERY == 0 {
+                cancel.check()?;
+            }
             let (ta, tb) = (input.time(i - 1), input.time(i));
             let (ua, ub) = (input.value(i - 1), input.value(i));
             let slope = (ub - ua) / (tb - ta);
@@ -390,12 +400,15 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
     }
 }
 
+/// Polls `cancel` every [`CANCEL_EVERY`] samples
+/// ([`SimulationError::Interrupted`] once it is set).
 pub(crate) fn simulate_sampled<F: FnMut(Sample)>(
     model: &NormalisedModel,
     input: &SampledInput<'_>,
     rtol: f64,
     atol: f64,
     opts: &Options,
+    cancel: Cancel,
     sink: F,
 ) -> Result<Summary, SimulationError> {
     let kappa = is_coulomb(model).then_some(model.kappa);
@@ -408,6 +421,7 @@ pub(crate) fn simulate_sampled<F: FnMut(Sample)>(
             rtol,
             atol,
             opts: *opts,
+            cancel,
             sink,
         },
     )

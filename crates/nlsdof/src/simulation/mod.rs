@@ -280,17 +280,33 @@ pub fn simulate<F: FnMut(Sample)>(
     opts: &Options,
     sink: F,
 ) -> Result<Summary, SimulationError> {
+    simulate_cancellable(model, input, opts, crate::cancel::Cancel::NEVER, sink)
+}
+
+/// As [`simulate`]; [`Method::DormandPrince`] polls `cancel` every 4096
+/// samples and then ends with [`SimulationError::Interrupted`]
+/// ([`crate::cancel`]). ([`Method::Rk4`] runs to the end: `cancel` is
+/// checked once it has.)
+pub fn simulate_cancellable<F: FnMut(Sample)>(
+    model: &(impl AsNormalised + ?Sized),
+    input: &SampledInput<'_>,
+    opts: &Options,
+    cancel: crate::cancel::Cancel,
+    sink: F,
+) -> Result<Summary, SimulationError> {
     let model = &model.as_normalised()?;
     check_model(model)?;
     check_options(opts)?;
-    match opts.method {
+    let summary = match opts.method {
         Method::Rk4 { samples_per_step } => {
             rk4::simulate_sampled(model, input, samples_per_step, opts, sink)
         }
         Method::DormandPrince { rtol, atol } => {
-            dopri::simulate_sampled(model, input, rtol, atol, opts, sink)
+            dopri::simulate_sampled(model, input, rtol, atol, opts, cancel, sink)
         }
-    }
+    }?;
+    cancel.check()?;
+    Ok(summary)
 }
 
 /// Output arrays of [`simulate_to_vec`]: state at sample indices

@@ -138,9 +138,10 @@ pub fn simulate_record(
 }
 
 /// As [`simulate_record`]; the default method ([`RecordMethod::Rk4Cubic`])
-/// polls `cancel` every 2^16 samples and then ends with
-/// [`SimulationError::Interrupted`] ([`crate::cancel`]). (The other methods
-/// run to the end: `cancel` is checked once they have.)
+/// polls `cancel` every 2^16 samples, [`RecordMethod::DormandPrince`]
+/// every 4096 samples, and then ends with [`SimulationError::Interrupted`]
+/// ([`crate::cancel`]). ([`RecordMethod::Rk4`] runs to the end: `cancel` is
+/// checked once it has.)
 pub fn simulate_record_cancellable(
     model: &(impl AsNormalised + ?Sized),
     values: &[f64],
@@ -169,9 +170,7 @@ pub fn simulate_record_cancellable(
         initial,
         decimation: 1,
     };
-    let summary = simulate(model, &input, &opts, sink)?;
-    cancel.check()?;
-    Ok(summary)
+    super::simulate_cancellable(model, &input, &opts, cancel, sink)
 }
 
 /// Estimated integration error of a [`RecordMethod::Rk4Cubic`] run, relative
@@ -217,6 +216,58 @@ mod record_tests {
                 matches!(e, SimulationError::NonPositiveFs { fs: v } if v.to_bits() == fs.to_bits()),
                 "{e}"
             );
+        }
+    }
+
+    /// A set flag stops every method with the typed error, before the end
+    /// of a record long enough to be polled (issue 27: Ctrl-C).
+    #[test]
+    fn a_cancelled_run_ends_with_interrupted() {
+        use std::sync::atomic::AtomicBool;
+        static STOP: AtomicBool = AtomicBool::new(true);
+        let cancel = Cancel::new(&STOP);
+        let m = Model::linear(1.0, 3947.84, 12.566).unwrap();
+        let u: Vec<f64> = (0..20_000).map(|k| (k as f64 * 0.1).sin()).collect();
+        for method in [
+            RecordMethod::Rk4Cubic,
+            RecordMethod::Rk4 {
+                samples_per_step: 2,
+            },
+            RecordMethod::DormandPrince {
+                rtol: 1e-10,
+                atol: 1e-13,
+            },
+        ] {
+            let mut seen = 0usize;
+            let e = simulate_record_cancellable(
+                &m,
+                &u,
+                (1.0, 0.0, 400.0),
+                method,
+                State::default(),
+                &mut |_| seen += 1,
+                cancel,
+            )
+            .unwrap_err();
+            assert!(
+                matches!(e, SimulationError::Interrupted(_)),
+                "{method:?}: {e}"
+            );
+            if let RecordMethod::DormandPrince { .. } = method {
+                // stopped at the first poll, not at the end of the record
+                assert!(seen <= 4096, "{seen} samples before the poll");
+            }
+            // the same run without a flag finishes
+            let ok = simulate_record_cancellable(
+                &m,
+                &u,
+                (1.0, 0.0, 400.0),
+                method,
+                State::default(),
+                &mut |_| {},
+                Cancel::NEVER,
+            );
+            assert!(ok.is_ok(), "{method:?}");
         }
     }
 

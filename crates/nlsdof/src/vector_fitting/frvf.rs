@@ -106,6 +106,10 @@ pub struct VfOptions {
     pub starting_damping: f64,
     /// Flip unstable poles into the left half plane.
     pub flip_unstable: bool,
+    /// Polled before each pole relocation and each residue solve: once
+    /// set, the fit ends with [`VectorFitError::Interrupted`]
+    /// ([`crate::cancel`]).
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl Default for VfOptions {
@@ -121,6 +125,7 @@ impl Default for VfOptions {
             spacing: Spacing::Linear,
             starting_damping: 0.01,
             flip_unstable: true,
+            cancel: crate::cancel::Cancel::NEVER,
         }
     }
 }
@@ -671,9 +676,11 @@ pub fn vector_fit(omega: &[f64], h: &[C64], opts: &VfOptions) -> Result<VfFit, V
     let mut iterations = 0;
     for it in 1..=opts.max_iterations {
         iterations = it;
+        opts.cancel.check()?;
         let new = prob.relocate(&poles, it, opts.flip_unstable)?;
         let change = pole_change(&poles, &new);
         poles = new;
+        opts.cancel.check()?;
         let (terms, d, e, rms) = prob.residues(&poles, it)?;
         history.push(rms);
         best = Some((terms, d, e, rms));

@@ -94,6 +94,10 @@ pub enum VectorFitError {
         iteration: usize,
         what: &'static str,
     },
+    /// Cancelled through [`VfOptions::cancel`] (or
+    /// [`SdofIdOptions::cancel`]): no result.
+    #[error(transparent)]
+    Interrupted(#[from] crate::cancel::Interrupted),
 }
 
 /// Validates an FRF: equal lengths, finite values, frequencies `>= 0` and

@@ -92,6 +92,10 @@ pub struct SdofIdOptions {
     pub weighting: FrfWeighting,
     /// Vector-fitting iteration limit.
     pub max_iterations: usize,
+    /// Polled by the vector fitting ([`VfOptions::cancel`]): once set,
+    /// [`identify_sdof`] ends with `SdofIdError::Fit(`
+    /// [`VectorFitError::Interrupted`]`)` ([`crate::cancel`]).
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl Default for SdofIdOptions {
@@ -107,6 +111,7 @@ impl Default for SdofIdOptions {
             proportional: false,
             weighting: FrfWeighting::Uniform,
             max_iterations: 30,
+            cancel: crate::cancel::Cancel::NEVER,
         }
     }
 }
@@ -227,6 +232,7 @@ pub fn identify_sdof(
             proportional: opts.proportional,
             weights,
             max_iterations: opts.max_iterations,
+            cancel: opts.cancel,
             ..Default::default()
         };
         let fitted = match opts.poles {

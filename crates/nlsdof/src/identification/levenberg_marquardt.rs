@@ -210,6 +210,46 @@ pub fn minimise<P: LeastSquares + ?Sized>(
     hi: &[f64],
     opts: &LmOptions,
 ) -> Result<LmResult, StartNotEvaluable> {
+    minimise_resumable(problem, u0, lo, hi, opts, LmState::default()).map(|(r, _)| r)
+}
+
+/// What [`minimise`] carries from one iteration to the next besides the
+/// point: the damping λ, its growth factor ν and the costs after the last
+/// accepted steps (the progress test of [`LmOptions::decrement_tol`]).
+/// [`minimise_resumable`] returns it, so that a run stopped by
+/// `max_iterations` can be continued from its point as if it had not
+/// stopped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LmState {
+    pub lambda: f64,
+    pub nu: f64,
+    history: std::collections::VecDeque<f64>,
+}
+
+impl Default for LmState {
+    /// The state [`minimise`] starts from.
+    fn default() -> Self {
+        Self {
+            lambda: 1e-3,
+            nu: 2.0,
+            history: std::collections::VecDeque::new(),
+        }
+    }
+}
+
+/// [`minimise`] from a given [`LmState`], returning the state at the stop.
+/// Continuing a run that stopped at `max_iterations` (from its `u`, with
+/// its state and the rest of the budget) gives the iterates the run would
+/// have taken without the stop (one more evaluation: the Jacobian at the
+/// restart point). [`minimise`] is this from [`LmState::default`].
+pub fn minimise_resumable<P: LeastSquares + ?Sized>(
+    problem: &P,
+    u0: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    opts: &LmOptions,
+    state: LmState,
+) -> Result<(LmResult, LmState), StartNotEvaluable> {
     let n = problem.n_params();
     let clamp = |v: f64, k: usize| v.max(lo[k]).min(hi[k]);
     let mut u: Vec<f64> = (0..n).map(|k| clamp(u0[k], k)).collect();
@@ -223,26 +263,37 @@ pub fn minimise<P: LeastSquares + ?Sized>(
         .ok_or_else(|| StartNotEvaluable { start: u.clone() })?;
     let mut evaluations = 1;
     let mut cost = sum_sq(&r);
-    let mut lambda = 1e-3;
-    let mut nu = 2.0;
+    let LmState {
+        mut lambda,
+        mut nu,
+        // costs after the last accepted steps (the progress test)
+        mut history,
+    } = state;
     let mut iterations = 0;
-    // costs after the last accepted steps (the progress test)
-    let mut history: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
-    let done = |u: Vec<f64>, cost, iterations, evaluations, termination| {
-        Ok(LmResult {
-            u,
-            cost,
-            iterations,
-            evaluations,
-            termination,
-        })
-    };
+    macro_rules! done {
+        ($u:expr, $cost:expr, $iterations:expr, $evaluations:expr, $termination:expr $(,)?) => {
+            Ok((
+                LmResult {
+                    u: $u,
+                    cost: $cost,
+                    iterations: $iterations,
+                    evaluations: $evaluations,
+                    termination: $termination,
+                },
+                LmState {
+                    lambda,
+                    nu,
+                    history,
+                },
+            ))
+        };
+    }
     loop {
         if cost <= opts.cost_floor {
-            return done(u, cost, iterations, evaluations, Termination::ZeroResidual);
+            return done!(u, cost, iterations, evaluations, Termination::ZeroResidual);
         }
         if iterations >= opts.max_iterations || opts.cancel.is_cancelled() {
-            return done(u, cost, iterations, evaluations, Termination::MaxIterations);
+            return done!(u, cost, iterations, evaluations, Termination::MaxIterations);
         }
         iterations += 1;
         let (a, g) = normal_equations(&j, &r, n);
@@ -262,7 +313,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
             })
             .fold(0.0, f64::max);
         if inactive.is_empty() || gnorm <= opts.gtol {
-            return done(u, cost, iterations, evaluations, Termination::SmallGradient);
+            return done!(u, cost, iterations, evaluations, Termination::SmallGradient);
         }
         let m = inactive.len();
         if opts.decrement_tol > 0.0 && r.len() > n {
@@ -279,7 +330,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 let dec: f64 = -x.iter().zip(&br).map(|(x, b)| x * -b).sum::<f64>();
                 let s2 = cost / (r.len() - n) as f64;
                 if dec.is_finite() && dec.abs() <= opts.decrement_tol * s2 {
-                    return done(
+                    return done!(
                         u,
                         cost,
                         iterations,
@@ -308,7 +359,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 lambda *= nu;
                 nu *= 2.0;
                 if lambda > 1e20 {
-                    return done(u, cost, iterations, evaluations, Termination::Stalled);
+                    return done!(u, cost, iterations, evaluations, Termination::Stalled);
                 }
                 continue;
             };
@@ -319,7 +370,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
             let step: Vec<f64> = (0..n).map(|k| un[k] - u[k]).collect();
             let small = (0..n).all(|k| step[k].abs() <= opts.xtol * (1.0 + u[k].abs()));
             if small {
-                return done(u, cost, iterations, evaluations, Termination::SmallStep);
+                return done!(u, cost, iterations, evaluations, Termination::SmallStep);
             }
             // linear-model prediction
             let mut lin = 0.0;
@@ -329,7 +380,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
             }
             let pred = cost - lin;
             if evaluations >= opts.max_evaluations || opts.cancel.is_cancelled() {
-                return done(u, cost, iterations, evaluations, Termination::MaxIterations);
+                return done!(u, cost, iterations, evaluations, Termination::MaxIterations);
             }
             evaluations += 1;
             // with the Jacobian when the problem asks for it (kept below if
@@ -366,7 +417,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                 let old = cost;
                 cost = cost_new;
                 if cost <= opts.cost_floor {
-                    return done(u, cost, iterations, evaluations, Termination::ZeroResidual);
+                    return done!(u, cost, iterations, evaluations, Termination::ZeroResidual);
                 }
                 if opts.decrement_tol > 0.0 && r.len() > n {
                     history.push_back(old);
@@ -377,7 +428,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                     if history.len() == PROGRESS_WINDOW
                         && history[0] - cost <= 100.0 * opts.decrement_tol * s2
                     {
-                        return done(
+                        return done!(
                             u,
                             cost,
                             iterations,
@@ -387,7 +438,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
                     }
                 }
                 if reduction <= opts.ftol * old {
-                    return done(
+                    return done!(
                         u,
                         cost,
                         iterations,
@@ -400,7 +451,7 @@ pub fn minimise<P: LeastSquares + ?Sized>(
             lambda *= nu;
             nu *= 2.0;
             if lambda > 1e20 {
-                return done(u, cost, iterations, evaluations, Termination::Stalled);
+                return done!(u, cost, iterations, evaluations, Termination::Stalled);
             }
         }
     }
@@ -524,6 +575,40 @@ mod tests {
             if hi == inf {
                 assert!(rb > 0, "the failing band was not visited");
             }
+        }
+    }
+
+    /// A run stopped at `max_iterations` and continued with its state takes
+    /// the iterates of the run that did not stop.
+    #[test]
+    fn resumed_run_takes_the_same_iterates() {
+        let inf = f64::INFINITY;
+        for (hi, decrement_tol) in [(inf, 0.0), (0.5, 0.0), (inf, 1e-30)] {
+            let opts = LmOptions {
+                decrement_tol,
+                ..LmOptions::default()
+            };
+            let (lo, hi) = ([-inf, -inf], [hi, inf]);
+            let whole = minimise(&Rosen, &[-1.2, 1.0], &lo, &hi, &opts).unwrap();
+            assert!(whole.iterations > 4, "{whole:?}");
+            let short = LmOptions {
+                max_iterations: 4,
+                ..opts
+            };
+            let (a, state) =
+                minimise_resumable(&Rosen, &[-1.2, 1.0], &lo, &hi, &short, LmState::default())
+                    .unwrap();
+            assert_eq!(a.termination, Termination::MaxIterations);
+            let rest = LmOptions {
+                max_iterations: opts.max_iterations - a.iterations,
+                ..opts
+            };
+            let (b, _) = minimise_resumable(&Rosen, &a.u, &lo, &hi, &rest, state).unwrap();
+            assert_eq!(b.u, whole.u);
+            assert_eq!(b.cost, whole.cost);
+            assert_eq!(b.termination, whole.termination);
+            assert_eq!(a.iterations + b.iterations, whole.iterations);
+            assert_eq!(a.evaluations + b.evaluations, whole.evaluations + 1);
         }
     }
 

@@ -83,6 +83,20 @@
 //! random exponent starts (SplitMix64, uniform in [0.5, 4]): the result is
 //! deterministic for a given seed and independent of the thread count.
 //!
+//! With a free damping exponent, the start from η = 1 is raced against a
+//! second one with the damping moved into the power-law term at η₀ = 0.05
+//! (δ₀ = 1 % of the equivalent linear damping at the RMS velocity, κ₀ the
+//! rest; `damping_moved_start`): near η = 0 the terms `δ v` and `κ v|v|^η`
+//! nearly coincide, and the cost has a long curved valley (`δ + κ v^η` and
+//! `κ η` nearly constant) that LM crawls along from η = 1 (Silverbox: 201
+//! iterations down to η = 0.017, δ = 0), or leaves for a local minimum at
+//! η = 0, κ = 0. Both starts get 10 LM iterations; the lower cost (the
+//! first on a tie) is continued from where it stopped, with its LM state,
+//! so that its iterates are those of an uninterrupted run
+//! ([`super::levenberg_marquardt::minimise_resumable`]).
+//! [`TimeFitOptions::fixed`] holds entries of θ at given values (e.g.
+//! δ = 0).
+//!
 //! ## Validation
 //!
 //! [`predict`] simulates a test range from its input alone; only the first
@@ -91,7 +105,8 @@
 
 use super::global::SplitMix64;
 use super::levenberg_marquardt::{
-    cholesky_solve, minimise, normal_equations, LeastSquares, LmOptions, Termination,
+    cholesky_solve, minimise_resumable, normal_equations, LeastSquares, LmOptions, LmState,
+    Termination,
 };
 use super::models::{ModelKind, Term};
 use super::uncertainty::t95;
@@ -1179,6 +1194,11 @@ pub struct TimeFitOptions {
     /// Target of the automatic choice: integration error (RMS change of ŷ
     /// when the substeps are doubled) over RMS output error.
     pub integration_tolerance: f64,
+    /// Entries of θ held at a value instead of fitted, `(index, value)`
+    /// (indices as [`TIME_PARAM_NAMES`]; model parameters α … b_y whose
+    /// value is inside the fit's bounds), e.g. `(DELTA, 0.0)`. Empty by
+    /// default.
+    pub fixed: Vec<(usize, f64)>,
 }
 
 impl Default for TimeFitOptions {
@@ -1199,6 +1219,7 @@ impl Default for TimeFitOptions {
             interpolation: InputInterpolation::Cubic,
             substeps: None,
             integration_tolerance: 0.01,
+            fixed: Vec::new(),
         }
     }
 }
@@ -1364,6 +1385,7 @@ struct Local {
     cost: f64,
     termination: Termination,
     iterations: usize,
+    evaluations: usize,
 }
 
 /// One bounded LM run over `free` from `start`.
@@ -1376,8 +1398,50 @@ fn local_fit(
     free: &[usize],
     lm: &LmOptions,
 ) -> Result<Local, TimeFitError> {
-    let scale: Vec<f64> = free
-        .iter()
+    local_fit_resumable(fine, disc, y, fs, start, free, lm, None).map(|(l, _)| l)
+}
+
+/// Where an LM run of [`local_fit_resumable`] stopped: its scaling of θ and
+/// its [`LmState`], to continue it.
+struct Resume {
+    scale: Vec<f64>,
+    /// The scaled point `z` it stopped at.
+    z: Vec<f64>,
+    state: LmState,
+}
+
+/// [`local_fit`], or the continuation of a run stopped at its iteration
+/// limit (`resume`: its scaling and state; `start` = its θ): the iterates of
+/// the run that did not stop.
+#[allow(clippy::too_many_arguments)]
+fn local_fit_resumable(
+    fine: &[f64],
+    disc: &Discretisation,
+    y: &[f64],
+    fs: f64,
+    start: &[f64; N_TIME_PARAMS],
+    free: &[usize],
+    lm: &LmOptions,
+    resume: Option<Resume>,
+) -> Result<(Local, Resume), TimeFitError> {
+    let (scale, z0, state) = match resume {
+        Some(r) => (r.scale, r.z, r.state),
+        None => {
+            let scale = scale_of(start, free, y, fs);
+            let z0 = free
+                .iter()
+                .zip(&scale)
+                .map(|(&p, s)| start[p] / s)
+                .collect();
+            (scale, z0, LmState::default())
+        }
+    };
+    local_fit_scaled(fine, disc, y, fs, start, free, lm, scale, z0, state)
+}
+
+/// The scaling `θ_p = scale_p z_p` of an LM run from `start`.
+fn scale_of(start: &[f64; N_TIME_PARAMS], free: &[usize], y: &[f64], fs: f64) -> Vec<f64> {
+    free.iter()
         .map(|&p| {
             let s = start[p].abs();
             match p {
@@ -1395,7 +1459,22 @@ fn local_fit(
                 _ => 1.0,
             }
         })
-        .collect();
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn local_fit_scaled(
+    fine: &[f64],
+    disc: &Discretisation,
+    y: &[f64],
+    fs: f64,
+    start: &[f64; N_TIME_PARAMS],
+    free: &[usize],
+    lm: &LmOptions,
+    scale: Vec<f64>,
+    z0: Vec<f64>,
+    state: LmState,
+) -> Result<(Local, Resume), TimeFitError> {
     let problem = OutputError {
         fine,
         y,
@@ -1407,11 +1486,6 @@ fn local_fit(
         logs: (free.contains(&RHO), free.contains(&ETA)),
         last: Default::default(),
     };
-    let z0: Vec<f64> = free
-        .iter()
-        .zip(&scale)
-        .map(|(&p, s)| start[p] / s)
-        .collect();
     let (lo, hi): (Vec<f64>, Vec<f64>) = free
         .iter()
         .zip(&scale)
@@ -1420,15 +1494,145 @@ fn local_fit(
             (l / s, h / s)
         })
         .unzip();
-    let r = minimise(&problem, &z0, &lo, &hi, lm).map_err(|_| match lm.cancel.check() {
-        Err(i) => TimeFitError::Interrupted(i),
-        Ok(()) => TimeFitError::StartNotEvaluable,
-    })?;
-    Ok(Local {
+    let (r, state) =
+        minimise_resumable(&problem, &z0, &lo, &hi, lm, state).map_err(|_| {
+            match lm.cancel.check() {
+                Err(i) => TimeFitError::Interrupted(i),
+                Ok(()) => TimeFitError::StartNotEvaluable,
+            }
+        })?;
+    let local = Local {
         theta: problem.theta(&r.u),
         cost: r.cost,
         termination: r.termination,
         iterations: r.iterations,
+        evaluations: r.evaluations,
+    };
+    Ok((
+        local,
+        Resume {
+            scale,
+            z: r.u,
+            state,
+        },
+    ))
+}
+
+/// Share of the equivalent linear damping left in δ by
+/// [`damping_moved_start`].
+const MOVED_DELTA_SHARE: f64 = 0.01;
+/// The damping exponent of [`damping_moved_start`].
+const MOVED_ETA: f64 = 0.05;
+/// LM iterations each start of [`race`] gets before the lower cost is
+/// continued.
+const RACE_ITERATIONS: usize = 10;
+
+/// The second start of the free-exponent stage: the fit `th` (exponents
+/// fixed) with its damping `δ v + κ v|v|^η` moved into the power-law term
+/// at a small exponent, `η₀ =` [`MOVED_ETA`], `δ₀ =` [`MOVED_DELTA_SHARE`]
+/// `· c`, `κ₀ = (1 −` [`MOVED_DELTA_SHARE`]`) c v_rms^−η₀`, with
+/// `c = δ + κ v_rms^η` the equivalent linear damping at the RMS velocity
+/// `v_rms` of `th`'s response. Near η = 0 the two damping terms nearly
+/// coincide and the cost has a long curved valley (`δ + κ v_rms^η` and
+/// `κ η` nearly constant) that LM crawls along from η = 1; this start
+/// is at its low-η end. `None` when the response has no velocity.
+fn damping_moved_start(
+    th: &[f64; N_TIME_PARAMS],
+    delta_free: bool,
+    fine: &[f64],
+    fs: f64,
+    disc: &Discretisation,
+) -> Option<[f64; N_TIME_PARAMS]> {
+    let mut ys = Vec::new();
+    let mut vs = Vec::new();
+    if !trajectory(
+        th,
+        fine,
+        fs,
+        disc,
+        (false, false),
+        &mut ys,
+        Some(&mut vs),
+        None,
+    ) {
+        return None;
+    }
+    let vrms = (vs.iter().map(|v| v * v).sum::<f64>() / vs.len() as f64).sqrt();
+    let c = th[DELTA] + th[KAPPA] * vrms.powf(th[ETA]);
+    let (delta, kappa) = if delta_free {
+        (
+            MOVED_DELTA_SHARE * c,
+            (1.0 - MOVED_DELTA_SHARE) * c * vrms.powf(-MOVED_ETA),
+        )
+    } else {
+        // δ held: all of the rest of the damping
+        (th[DELTA], (c - th[DELTA]) * vrms.powf(-MOVED_ETA))
+    };
+    if !(vrms > 0.0 && c > 0.0 && kappa > 0.0 && kappa.is_finite()) {
+        return None;
+    }
+    let mut moved = *th;
+    moved[DELTA] = delta;
+    moved[KAPPA] = kappa;
+    moved[ETA] = MOVED_ETA;
+    Some(moved)
+}
+
+/// LM from each of `starts` (in parallel) for at most [`RACE_ITERATIONS`]
+/// iterations; the lowest cost (the first on a tie) is continued to
+/// convergence with the rest of the budget `lm`. Deterministic and
+/// independent of the thread count. Errors only when no start is
+/// evaluable.
+fn race(
+    fine: &[f64],
+    disc: &Discretisation,
+    y: &[f64],
+    fs: f64,
+    starts: &[[f64; N_TIME_PARAMS]],
+    free: &[usize],
+    lm: &LmOptions,
+) -> Result<Local, TimeFitError> {
+    let short = LmOptions {
+        max_iterations: RACE_ITERATIONS.min(lm.max_iterations),
+        ..*lm
+    };
+    let mut winner: Option<(Local, Resume)> = None;
+    let mut error = None;
+    let screened: Vec<Result<(Local, Resume), TimeFitError>> = starts
+        .par_iter()
+        .map(|th| local_fit_resumable(fine, disc, y, fs, th, free, &short, None))
+        .collect();
+    for r in screened {
+        match r {
+            Ok(r) => {
+                let lower = match &winner {
+                    Some(w) => r.0.cost < w.0.cost,
+                    None => true,
+                };
+                if lower {
+                    winner = Some(r);
+                }
+            }
+            Err(e) => error = error.or(Some(e)),
+        }
+    }
+    let Some((w, resume)) = winner else {
+        return Err(error.unwrap_or(TimeFitError::StartNotEvaluable));
+    };
+    if w.termination != Termination::MaxIterations || w.iterations < short.max_iterations {
+        return Ok(w);
+    }
+    // the winner continued as if it had not stopped
+    let rest = LmOptions {
+        max_iterations: lm.max_iterations - w.iterations,
+        max_evaluations: lm.max_evaluations.saturating_sub(w.evaluations),
+        ..*lm
+    };
+    let (c, _) = local_fit_resumable(fine, disc, y, fs, &w.theta, free, &rest, Some(resume))?;
+    Ok(Local {
+        iterations: w.iterations + c.iterations,
+        evaluations: w.evaluations + c.evaluations,
+        ..c
     })
 }
 
@@ -1471,7 +1675,21 @@ pub fn fit_time_domain(
         opts.interpolation,
         opts.substeps.unwrap_or(Discretisation::default().substeps),
     )?;
-    let start = equation_error(u, y, fs, stiff, damp)?;
+    for &(p, v) in &opts.fixed {
+        let (lo, hi) = bounds(p.min(N_TIME_PARAMS - 1));
+        if !(p <= OUTPUT_OFFSET && v.is_finite() && lo <= v && v <= hi) {
+            return Err(TimeFitError::InvalidOption {
+                name: "fixed",
+                value: v,
+                reason: "must hold a model parameter (alpha ... output_offset) at a finite value inside its bounds",
+            });
+        }
+    }
+    let held = |p: &usize| opts.fixed.iter().any(|&(q, _)| q == *p);
+    let mut start = equation_error(u, y, fs, stiff, damp)?;
+    for &(p, v) in &opts.fixed {
+        start[p] = v;
+    }
     let mut fine = disc.fine(u);
     let simulate = |th: &[f64; N_TIME_PARAMS], fine: &[f64], disc: &Discretisation| {
         let mut ys = Vec::new();
@@ -1492,6 +1710,7 @@ pub fn fit_time_domain(
     if damp.is_some() {
         free.push(KAPPA);
     }
+    free.retain(|p| !held(p));
     free.sort_unstable();
     let stage1 = local_fit(&fine, &disc, y, fs, &start, &free, &opts.lm)?;
     let mut best = stage1;
@@ -1503,6 +1722,7 @@ pub fn fit_time_domain(
     if matches!(d, Term::FreeExponent) {
         free2.push(ETA);
     }
+    free2.retain(|p| !held(p));
     free2.sort_unstable();
     if free2.len() > free.len() {
         let mut starts = vec![best.theta];
@@ -1519,14 +1739,32 @@ pub fn fit_time_domain(
         }
         for th in starts.iter_mut() {
             // a small positive κ so that η has a gradient
-            if free2.contains(&ETA) && th[KAPPA] <= 0.0 {
+            if free2.contains(&ETA) && free2.contains(&KAPPA) && th[KAPPA] <= 0.0 {
                 th[KAPPA] = 1e-3 * th[DELTA].max(1e-12);
             }
         }
-        let results: Vec<Result<Local, TimeFitError>> = starts
-            .par_iter()
-            .map(|th| local_fit(&fine, &disc, y, fs, th, &free2, &opts.lm))
-            .collect();
+        // the start with the linear damping moved into the power law, raced
+        // against the first: both screened, the lower cost continued
+        let moved = (free2.contains(&ETA) && free2.contains(&KAPPA))
+            .then(|| damping_moved_start(&best.theta, free2.contains(&DELTA), &fine, fs, &disc))
+            .flatten();
+        let full = |ths: &[[f64; N_TIME_PARAMS]]| -> Vec<Result<Local, TimeFitError>> {
+            ths.par_iter()
+                .map(|th| local_fit(&fine, &disc, y, fs, th, &free2, &opts.lm))
+                .collect()
+        };
+        let results: Vec<Result<Local, TimeFitError>> = match moved {
+            Some(moved) => {
+                let pair = [starts[0], moved];
+                let (raced, mut others) = rayon::join(
+                    || race(&fine, &disc, y, fs, &pair, &free2, &opts.lm),
+                    || full(&starts[1..]),
+                );
+                others.insert(0, raced);
+                others
+            }
+            None => full(&starts),
+        };
         for r in results.into_iter().flatten() {
             if r.cost < best.cost {
                 best = r;

@@ -30,6 +30,18 @@
 //! `F(t) e^{−M(t)}` with `M(t) = maxᵢ (ln|cᵢ| + eᵢ t)`, so no term overflows.
 //! Callers that know a more accurate (unexpanded) formula for the top levels
 //! pass it in: expanding a product can cancel digits near a root.
+//!
+//! **Warm start** ([`PowerSum::roots_warm_in`]): along a sweep the roots of
+//! every level move little from one frequency to the next. Given the
+//! previous frequency's roots per level as hints, each level is isolated
+//! exactly as above (the next level's roots split the range into monotone
+//! intervals, a sign change at the ends of one proves a single root in
+//! it), and only the polishing changes: safeguarded Newton from the hint
+//! inside the bracket (the derivative is analytic), with Brent's method on
+//! the shrunk bracket when a step leaves it or stops converging
+//! quadratically, and Brent from the bracket ends where no hint lies in
+//! it. The bracket is verified either way, so the roots are those of the
+//! cold isolation to its tolerance.
 
 /// A sum of real powers, terms sorted by increasing exponent, equal exponents
 /// merged, zero coefficients dropped.
@@ -43,6 +55,73 @@ pub struct PowerSum {
 /// A function used for sign tests and root polishing in place of the
 /// expanded sum (same sign as the sum for every `t`).
 pub type Evaluator<'a> = &'a dyn Fn(f64) -> f64;
+
+/// An [`Evaluator`] with its derivative in `t`: `(f(t), f′(t))`, where
+/// `f(t)` is bit for bit the value of the plain evaluator it goes with
+/// (so the warm isolation takes the same sign decisions as the cold one).
+pub type EvaluatorWithSlope<'a> = &'a dyn Fn(f64) -> (f64, f64);
+
+/// Counts one evaluation of kind `k` of the isolation, in builds with
+/// `RUSTFLAGS="--cfg nlsdof_count"` only (nothing in ordinary builds):
+/// `0` top level, `1` level 1, `2` deeper levels (scaled sums), `3` an
+/// isolation; per Rolle level `l` (0 = roots) at `4 + 3l`: polishes from a
+/// hint, polishes without one (Brent), Newton runs that fell back to
+/// Brent; `22`–`24` why Newton fell back (step out of the bracket, at the
+/// rounding floor, slow). Printed to stderr at process exit.
+#[inline(always)]
+#[allow(unused_variables, unexpected_cfgs)]
+pub(crate) fn count(k: usize) {
+    #[cfg(nlsdof_count)]
+    {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        #[allow(clippy::declare_interior_mutable_const)]
+        const ZERO: AtomicU64 = AtomicU64::new(0);
+        static COUNTS: [AtomicU64; 26] = [ZERO; 26];
+        extern "C" fn dump() {
+            let c: Vec<u64> = COUNTS.iter().map(|c| c.load(Ordering::Relaxed)).collect();
+            eprintln!(
+                "nlsdof_count: isolations {} evaluations top {} level1 {} deeper {} \
+                 (per isolation {:.1})",
+                c[3],
+                c[0],
+                c[1],
+                c[2],
+                (c[0] + c[1] + c[2]) as f64 / c[3].max(1) as f64
+            );
+            eprintln!(
+                "nlsdof_count: fallbacks: out of bracket {}, at floor {}, slow {}",
+                c[22], c[23], c[24]
+            );
+            for l in 0..5 {
+                eprintln!(
+                    "nlsdof_count: level {l}: polished from a hint {}, without {}, fell back {}",
+                    c[4 + 3 * l],
+                    c[5 + 3 * l],
+                    c[6 + 3 * l]
+                );
+            }
+        }
+        #[used]
+        #[link_section = ".fini_array"]
+        static DUMP: extern "C" fn() = dump;
+        COUNTS[k].fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// `true` in counting builds (see [`count`]) run with `NLSDOF_COLD` set:
+/// the fold search then isolates cold, to measure the warm start against.
+#[inline(always)]
+#[allow(unexpected_cfgs)]
+pub(crate) fn cold_requested() -> bool {
+    #[cfg(nlsdof_count)]
+    {
+        std::env::var_os("NLSDOF_COLD").is_some()
+    }
+    #[cfg(not(nlsdof_count))]
+    {
+        false
+    }
+}
 
 impl PowerSum {
     /// Builds `Σ c x^e` from `(exponent, coefficient)` pairs. Non-finite
@@ -136,6 +215,33 @@ impl PowerSum {
         s
     }
 
+    /// [`Self::eval_scaled`] (the same value, bit for bit) and its
+    /// derivative in `t`: `d/dt [F e^{−M}] = Σ cᵢ (eᵢ − e_k) e^{ln|cᵢ| + eᵢt − M}`,
+    /// `e_k` the exponent of the largest term (the slope of `M`).
+    pub(crate) fn eval_scaled_with_slope(&self, t: f64) -> (f64, f64) {
+        let mut m = f64::NEG_INFINITY;
+        let mut e_k = 0.0;
+        for (l, e) in self.log_abs.iter().zip(&self.exponents) {
+            let v = l + e * t;
+            if v > m {
+                e_k = *e;
+            }
+            m = m.max(v);
+        }
+        let (mut s, mut ds) = (0.0, 0.0);
+        for ((l, e), c) in self
+            .log_abs
+            .iter()
+            .zip(&self.exponents)
+            .zip(&self.coefficients)
+        {
+            let term = c.signum() * (l + e * t - m).exp();
+            s += term;
+            ds += (e - e_k) * term;
+        }
+        (s, ds)
+    }
+
     /// Plain evaluation `Σ cᵢ x^{eᵢ}` (may overflow for extreme `x`).
     pub fn eval(&self, x: f64) -> f64 {
         self.exponents
@@ -151,14 +257,37 @@ impl PowerSum {
         if self.exponents.is_empty() {
             return self.clone();
         }
+        // As `PowerSum::new` of the shifted terms, without its sort: the
+        // exponents are sorted, and `e − e₁` rounds monotonically, so they
+        // stay sorted (equal ones merged in order, as there).
         let e1 = self.exponents[0];
-        PowerSum::new(
-            self.exponents
-                .iter()
-                .zip(&self.coefficients)
-                .skip(1)
-                .map(|(e, c)| (e - e1, c * (e - e1))),
-        )
+        let n = self.len() - 1;
+        let mut exponents: Vec<f64> = Vec::with_capacity(n);
+        let mut coefficients: Vec<f64> = Vec::with_capacity(n);
+        for (e, c) in self.exponents.iter().zip(&self.coefficients).skip(1) {
+            let (e, c) = (e - e1, c * (e - e1));
+            if exponents.last() == Some(&e) {
+                *coefficients.last_mut().unwrap() += c;
+                continue;
+            }
+            exponents.push(e);
+            coefficients.push(c);
+        }
+        let mut i = 0;
+        while i < exponents.len() {
+            if coefficients[i] == 0.0 {
+                exponents.remove(i);
+                coefficients.remove(i);
+            } else {
+                i += 1;
+            }
+        }
+        let log_abs = coefficients.iter().map(|c| c.abs().ln()).collect();
+        Self {
+            exponents,
+            coefficients,
+            log_abs,
+        }
     }
 
     /// An interval `[T_lo, T_hi]` of `t = ln x` that contains every root
@@ -235,6 +364,113 @@ impl PowerSum {
         out
     }
 
+    /// As [`Self::roots_with_levels_in`], warm started: `hints[k]` are
+    /// points near which the roots of level `k` are expected (level 0: the
+    /// roots, 1: critical points, …; typically the previous frequency's
+    /// `levels`), `levels` receives the roots of every level the recursion
+    /// went through (level 0 the roots; `levels[k]` the separating points
+    /// of level `k − 1`, empty below the deepest level). Evaluators come
+    /// with their slopes (see [`EvaluatorWithSlope`]), the plain one for the
+    /// sign tests. The isolation is the exact one; only the polishing of a
+    /// root whose bracket holds a hint starts there (module docs).
+    pub fn roots_warm_in(
+        &self,
+        lo: f64,
+        hi: f64,
+        evaluators: &[(Evaluator<'_>, EvaluatorWithSlope<'_>)],
+        hints: &[Vec<f64>],
+        levels: &mut Vec<Vec<f64>>,
+    ) {
+        levels.resize(self.len().max(1), Vec::new());
+        levels.iter_mut().for_each(Vec::clear);
+        // the bracket ends and their values of every level, one allocation
+        let mut scratch = Vec::with_capacity(4 * self.len() + 8);
+        self.roots_rec_warm(lo, hi, evaluators, hints, levels, &mut scratch);
+    }
+
+    fn roots_rec_warm(
+        &self,
+        lo: f64,
+        hi: f64,
+        evaluators: &[(Evaluator<'_>, EvaluatorWithSlope<'_>)],
+        hints: &[Vec<f64>],
+        levels: &mut [Vec<f64>],
+        scratch: &mut Vec<f64>,
+    ) {
+        if self.len() < 2 || lo >= hi || self.sign_changes() == 0 {
+            return;
+        }
+        let (here, deeper) = levels.split_at_mut(1);
+        let out = &mut here[0];
+        let scaled = |t: f64| {
+            count(2);
+            self.eval_scaled(t)
+        };
+        let scaled_d = |t: f64| {
+            count(2);
+            self.eval_scaled_with_slope(t)
+        };
+        let (f, fd): (Evaluator<'_>, EvaluatorWithSlope<'_>) = match evaluators.first() {
+            Some(&(f, fd)) => (f, fd),
+            None => (&scaled, &scaled_d),
+        };
+        if self.sign_changes() >= 2 {
+            let d = self.reduced_derivative();
+            d.roots_rec_warm(
+                lo,
+                hi,
+                evaluators.get(1..).unwrap_or(&[]),
+                hints.get(1..).unwrap_or(&[]),
+                deeper,
+                scratch,
+            );
+            deeper[0].retain(|&c| c > lo && c < hi);
+        }
+        // points (lo, the next level's roots, hi) and their values, on the
+        // scratch stack above the deeper levels' (which are done)
+        let base = scratch.len();
+        scratch.push(lo);
+        if self.sign_changes() >= 2 {
+            scratch.extend(deeper[0].iter().copied());
+        }
+        scratch.push(hi);
+        let n = scratch.len() - base;
+        for i in 0..n {
+            let v = f(scratch[base + i]);
+            scratch.push(v);
+        }
+        let (points, vals) = scratch[base..].split_at(n);
+        for i in 1..n - 1 {
+            if vals[i] == 0.0 {
+                out.push(points[i]);
+            }
+        }
+        let hint = hints.first().map_or(&[][..], |h| &h[..]);
+        for i in 0..n - 1 {
+            let (a, b) = (points[i], points[i + 1]);
+            let (fa, fb) = (vals[i], vals[i + 1]);
+            if fa == 0.0 || fb == 0.0 {
+                continue;
+            }
+            if (fa < 0.0) != (fb < 0.0) {
+                let start = hint.iter().copied().find(|&h| h > a && h < b);
+                let depth = 6usize.saturating_sub(self.len()).min(5);
+                out.push(match start {
+                    Some(h) => {
+                        count(4 + 3 * depth);
+                        newton_from(fd, f, a, b, fa, fb, h, 6 + 3 * depth)
+                    }
+                    None => {
+                        count(5 + 3 * depth);
+                        brent(f, a, b, fa, fb)
+                    }
+                });
+            }
+        }
+        scratch.truncate(base);
+        out.sort_by(f64::total_cmp);
+    }
+
     fn roots_rec(
         &self,
         lo: f64,
@@ -249,7 +485,10 @@ impl PowerSum {
         }
         let f = |t: f64| match top {
             Some(g) => g(t),
-            None => self.eval_scaled(t),
+            None => {
+                count(2);
+                self.eval_scaled(t)
+            }
         };
         let mut points = vec![lo];
         if self.sign_changes() >= 2 {
@@ -290,6 +529,69 @@ impl PowerSum {
         vals.clear();
         out.sort_by(f64::total_cmp);
     }
+}
+
+/// The root of `f` in the bracket `[a, b]` (`f(a) = fa` and `f(b) = fb`
+/// of opposite signs), by Newton's method from `t0 ∈ (a, b)` (`fd` gives
+/// `f` and its slope), each step shrinking the bracket; where a step would
+/// leave the bracket or does not at least halve the previous one (not yet
+/// or no longer quadratic: far from the root, or at the rounding floor),
+/// [`brent`] on the shrunk bracket. Converged when a step is within
+/// Brent's tolerance (`2ε|t|`). `counter`: see [`count`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn newton_from(
+    fd: &dyn Fn(f64) -> (f64, f64),
+    f: &dyn Fn(f64) -> f64,
+    a: f64,
+    b: f64,
+    fa: f64,
+    fb: f64,
+    t0: f64,
+    counter: usize,
+) -> f64 {
+    let (mut a, mut b, mut fa, mut fb) = (a, b, fa, fb);
+    let neg_at_a = fa < 0.0;
+    let mut t = t0;
+    let mut last_step = f64::INFINITY;
+    for _ in 0..12 {
+        let (v, dv) = fd(t);
+        if v == 0.0 {
+            return t;
+        }
+        if !v.is_finite() {
+            break;
+        }
+        if (v < 0.0) == neg_at_a {
+            a = t;
+            fa = v;
+        } else {
+            b = t;
+            fb = v;
+        }
+        let next = t - v / dv;
+        let step = (next - t).abs();
+        if step <= 2.0 * f64::EPSILON * t.abs() + 1e-300 {
+            // converged (`t` is an end of the shrunk bracket: the step may
+            // round onto it)
+            return next.clamp(a, b);
+        }
+        if !(next.is_finite() && next > a && next < b) {
+            count(22);
+            break;
+        }
+        if step > 0.5 * last_step {
+            if step < 64.0 * f64::EPSILON * (1.0 + t.abs()) {
+                count(23);
+            } else {
+                count(24);
+            }
+            break;
+        }
+        last_step = step;
+        t = next;
+    }
+    count(counter);
+    brent(f, a, b, fa, fb)
 }
 
 /// Brent's bracketing root finder on `[a, b]` with `f(a) f(b) < 0`, to

@@ -194,6 +194,49 @@ impl ResponseEquation {
         }
     }
 
+    /// `(ln P, d ln P/dt, d² ln P/dt²)` at `t = ln x`, the first two
+    /// exactly as [`Self::ln_p_and_slope`] computes them (bit for bit).
+    /// With `A = S S′ + D D′` (`′` = d/dt: `S′ = ρs₁x^ρ`, `S″ = ρS′`, same
+    /// for `D` with η) and `Q = S² + D²`:
+    /// `d² ln P/dt² = 2 (S′² + S S″ + D′² + D D″)/Q − 4 (A/Q)²`.
+    #[inline]
+    fn ln_p_slope_curvature(&self, t: f64) -> (f64, f64, f64) {
+        let (s, d, st, dt) = self.parts(t);
+        let (lp, slope) = if s.abs() < 1e150 && d.abs() < 1e150 {
+            let q = s * s + d * d;
+            (2.0 * t + q.ln(), 2.0 + 2.0 * (s * st + d * dt) / q)
+        } else {
+            let h = s.hypot(d);
+            (
+                2.0 * t + 2.0 * h.ln(),
+                2.0 + 2.0 * ((s / h) * (st / h) + (d / h) * (dt / h)),
+            )
+        };
+        let h = s.hypot(d);
+        let (sn, dn, stn, dtn) = (s / h, d / h, st / h, dt / h);
+        let a = sn * stn + dn * dtn;
+        let a1 = stn * stn + sn * self.rho * stn + dtn * dtn + dn * self.eta * dtn;
+        (lp, slope, 2.0 * a1 - 4.0 * a * a)
+    }
+
+    /// [`Self::level1`] (the same value, bit for bit) and its derivative
+    /// in `t` (with `s`, `s′` the first two derivatives of `ln P`):
+    /// `s′ − e_min e^{−ln P} s` where `P > 1`, `P (s² + s′ − e_min s)`
+    /// elsewhere.
+    pub(crate) fn level1_with_slope(&self, t: f64, e_min: f64) -> (f64, f64) {
+        let (lp, slope, curv) = self.ln_p_slope_curvature(t);
+        if lp > 0.0 {
+            let q = (-lp).exp();
+            (slope + e_min * (q - 1.0), curv - e_min * q * slope)
+        } else {
+            let p = lp.exp();
+            (
+                p * slope - e_min * (p - 1.0),
+                p * (slope * slope + curv - e_min * slope),
+            )
+        }
+    }
+
     /// Range of `t` in which the accurate evaluators cannot overflow.
     fn safe_range(&self) -> (f64, f64) {
         // ln P = 2t + ln(S² + D²) never forms x², so only x itself and the
@@ -264,14 +307,21 @@ impl ResponseEquation {
     /// `ln P = 0`; a pair of critical points is born where the slope at an
     /// inflection point touches zero. Used by the fold search.
     pub fn fold_indicators(&self) -> Result<FoldIndicators, SolveError> {
+        crate::power_sum::count(3);
         let (ps, u) = self.scaled_power_sum();
         if ps.sign_changes() == 0 {
             return Ok(FoldIndicators::default());
         }
         let (lo, hi) = self.search_range(&ps, u)?;
         let e_min = ps.exponents()[0];
-        let top = |t: f64| self.ln_p(t + u);
-        let second = |t: f64| self.level1(t + u, e_min);
+        let top = |t: f64| {
+            crate::power_sum::count(0);
+            self.ln_p(t + u)
+        };
+        let second = |t: f64| {
+            crate::power_sum::count(1);
+            self.level1(t + u, e_min)
+        };
         let mut levels = [Vec::new(), Vec::new()];
         let roots = ps.roots_with_levels_in(lo, hi, Some(&top), Some(&second), &mut levels);
         let [crit, infl] = levels;
@@ -285,6 +335,74 @@ impl ResponseEquation {
             inflection: infl
                 .into_iter()
                 .map(|t| (t + u, self.level1(t + u, e_min)))
+                .collect(),
+        })
+    }
+
+    /// As [`Self::fold_indicators`], warm started from `hints`: the roots
+    /// of every level of the isolation at a nearby frequency (`t = ln x`;
+    /// the `levels` of a previous call, or empty). The isolation is the
+    /// exact one (every bracket verified by a sign change on a monotone
+    /// interval); only the polishing of each root starts at the hint in
+    /// its bracket, by safeguarded Newton ([`PowerSum::roots_warm_in`]).
+    /// `levels` receives this frequency's roots per level, for the next
+    /// call. The results equal the cold isolation's to its tolerance
+    /// (`2ε|t|`; test `warm_isolation_matches_the_cold_one`).
+    pub(crate) fn fold_indicators_warm(
+        &self,
+        hints: &[Vec<f64>],
+        levels: &mut Vec<Vec<f64>>,
+    ) -> Result<FoldIndicators, SolveError> {
+        crate::power_sum::count(3);
+        let (ps, u) = self.scaled_power_sum();
+        if ps.sign_changes() == 0 {
+            levels.clear();
+            return Ok(FoldIndicators::default());
+        }
+        let (lo, hi) = self.search_range(&ps, u)?;
+        let e_min = ps.exponents()[0];
+        let top = |t: f64| {
+            crate::power_sum::count(0);
+            self.ln_p(t + u)
+        };
+        let top_d = |t: f64| {
+            crate::power_sum::count(0);
+            self.ln_p_and_slope(t + u)
+        };
+        let second = |t: f64| {
+            crate::power_sum::count(1);
+            self.level1(t + u, e_min)
+        };
+        let second_d = |t: f64| {
+            crate::power_sum::count(1);
+            self.level1_with_slope(t + u, e_min)
+        };
+        let evaluators: [(
+            crate::power_sum::Evaluator<'_>,
+            crate::power_sum::EvaluatorWithSlope<'_>,
+        ); 2] = [(&top, &top_d), (&second, &second_d)];
+        let shifted: Vec<Vec<f64>>;
+        let hints = if u == 0.0 {
+            hints
+        } else {
+            shifted = hints
+                .iter()
+                .map(|h| h.iter().map(|t| t - u).collect())
+                .collect();
+            &shifted[..]
+        };
+        ps.roots_warm_in(lo, hi, &evaluators, hints, levels);
+        if u != 0.0 {
+            levels.iter_mut().flatten().for_each(|t| *t += u);
+        }
+        let level = |k: usize| levels.get(k).map_or(&[][..], |v| &v[..]);
+        Ok(FoldIndicators {
+            e_min,
+            roots: level(0).to_vec(),
+            critical: level(1).iter().map(|&t| (t, self.ln_p(t))).collect(),
+            inflection: level(2)
+                .iter()
+                .map(|&t| (t, self.level1(t, e_min)))
                 .collect(),
         })
     }
@@ -685,6 +803,54 @@ mod tests {
             "{checked} roots against Brent; {bracketed} root sets bracketed, {declined} declined"
         );
         assert!(checked > 4000 && bracketed > 3000, "{checked} {bracketed}");
+    }
+
+    /// The slopes of the warm isolation's evaluators against central
+    /// differences, and their values bit for bit those of the plain ones.
+    #[test]
+    fn evaluator_slopes_match_differences() {
+        let mut rnd = crate::harmonic_balance::test_uniform(0x51_0be5_0000_0004u64);
+        let mut checked = 0;
+        for case in 0..2000 {
+            let nu = 0.8 + 0.5 * rnd();
+            let sign = if case % 3 == 2 { -1.0 } else { 1.0 };
+            let eq = ResponseEquation::new(
+                1.0 - nu * nu,
+                sign * 10f64.powf(-3.0 + 4.0 * rnd()),
+                0.3 + 3.0 * rnd(),
+                10f64.powf(-3.5 + 2.0 * rnd()),
+                10f64.powf(-4.0 + 3.0 * rnd()),
+                -1.0 + 3.0 * rnd(),
+            );
+            let (ps, _) = eq.scaled_power_sum();
+            let e_min = ps.exponents()[0];
+            let sums = [
+                ps.reduced_derivative(),
+                ps.reduced_derivative().reduced_derivative(),
+            ];
+            for _ in 0..5 {
+                let t = -6.0 + 12.0 * rnd();
+                let h = 1e-5;
+                let (v, dv) = eq.level1_with_slope(t, e_min);
+                assert_eq!(v.to_bits(), eq.level1(t, e_min).to_bits());
+                let fd = (eq.level1(t + h, e_min) - eq.level1(t - h, e_min)) / (2.0 * h);
+                assert!(
+                    (dv - fd).abs() <= 1e-5 * (1.0 + fd.abs()),
+                    "level 1 at {t}: {dv} vs {fd}: {eq:?}"
+                );
+                for p in &sums {
+                    let (v, dv) = p.eval_scaled_with_slope(t);
+                    assert_eq!(v.to_bits(), p.eval_scaled(t).to_bits());
+                    let fd = (p.eval_scaled(t + h) - p.eval_scaled(t - h)) / (2.0 * h);
+                    assert!(
+                        (dv - fd).abs() <= 1e-5 * (1.0 + fd.abs()),
+                        "scaled sum at {t}: {dv} vs {fd}: {p:?}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 9000);
     }
 
     #[test]

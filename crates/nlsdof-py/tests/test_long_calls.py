@@ -135,6 +135,17 @@ LONG_CALLS = {
         """,
         'm.simulate(u, fs, method="dopri")',
     ),
+    # a generalised time-domain fit of a 400,000-sample record
+    "fit_time": (
+        f"""
+        m = nlsdof.Model.from_toml({str(ROOT / "examples" / "har-wing.toml")!r})
+        fs = 100.0
+        t = np.arange(400_000) / fs
+        u = sum(0.3 * np.sin(2 * np.pi * f * t + k) for k, f in enumerate(np.linspace(4.0, 7.0, 7)))
+        y = m.simulate(u, fs).x
+        """,
+        'nlsdof.fit_time(u, y, fs, model="generalised")',
+    ),
 }
 
 

@@ -1019,6 +1019,10 @@ struct OutputError<'a> {
     /// asks for the Jacobian at the trial point it has just accepted, whose
     /// trajectory (with its powers and logs) is then reused as it is.
     last: std::sync::Mutex<LastTrajectory>,
+    /// Ctrl-C: once set, evaluations return `None` (before the trajectory
+    /// and between it and the sensitivities), so a stop waits for at most
+    /// one of the two passes; LM then ends and the fit reports `Interrupted`.
+    cancel: crate::cancel::Cancel,
 }
 
 /// See [`OutputError::last`].
@@ -1045,6 +1049,9 @@ impl LeastSquares for OutputError<'_> {
         self.free.len()
     }
     fn residuals(&self, z: &[f64]) -> Option<Vec<f64>> {
+        if self.cancel.is_cancelled() {
+            return None;
+        }
         let th = self.theta(z);
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
         let last = &mut *last;
@@ -1070,6 +1077,9 @@ impl LeastSquares for OutputError<'_> {
         Some(ys)
     }
     fn residuals_and_jacobian(&self, z: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        if self.cancel.is_cancelled() {
+            return None;
+        }
         let th = self.theta(z);
         let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
         let last = &mut *last;
@@ -1097,6 +1107,9 @@ impl LeastSquares for OutputError<'_> {
             ) {
                 return None;
             }
+        }
+        if self.cancel.is_cancelled() {
+            return None;
         }
         let flat = sensitivities_split(
             &th,
@@ -1485,6 +1498,7 @@ fn local_fit_scaled(
         scale: scale.clone(),
         logs: (free.contains(&RHO), free.contains(&ETA)),
         last: Default::default(),
+        cancel: lm.cancel,
     };
     let (lo, hi): (Vec<f64>, Vec<f64>) = free
         .iter()
@@ -2269,6 +2283,7 @@ mod tests {
             scale: scale.clone(),
             logs: (true, true),
             last: Default::default(),
+            cancel: crate::cancel::Cancel::NEVER,
         };
         let z: Vec<f64> = th.iter().zip(&scale).map(|(t, s)| t / s * 1.0001).collect();
         let z2: Vec<f64> = z.iter().map(|v| v * 0.9999).collect();

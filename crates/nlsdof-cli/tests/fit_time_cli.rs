@@ -150,6 +150,63 @@ fn fits_predicts_and_simulate_reproduces_the_prediction() {
     assert!(err < 1e-9 * scale, "simulate vs prediction: {err:e}");
 }
 
+/// `--fix NAME=VALUE` holds a parameter: held at its true value the others
+/// are still recovered, the held value is in the document and the model
+/// file, and it is not among the free parameters.
+#[test]
+fn fix_holds_a_parameter_at_its_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_record(dir.path());
+    let model = dir.path().join("model.toml");
+    let t = truth();
+    let held = format!("gain={}", t.gain * 1.5);
+    let run = |fix: &str| {
+        json(&[
+            "fit-time",
+            "--input",
+            rec.to_str().unwrap(),
+            "--input-column",
+            "V1",
+            "--output-column",
+            "V2",
+            "--fs",
+            "200",
+            "--range",
+            "0:2000",
+            "--model",
+            "duffing",
+            "--fix",
+            fix,
+            "--out",
+            model.to_str().unwrap(),
+            "--json",
+        ])
+    };
+    let v = run("delta=3");
+    assert_eq!(v["parameters"]["delta"].as_f64(), Some(3.0), "{v}");
+    for (name, want) in [
+        ("alpha", t.model.alpha),
+        ("beta", t.model.beta),
+        ("gain", t.gain),
+    ] {
+        let got = v["parameters"][name].as_f64().unwrap();
+        assert!((got - want).abs() <= 1e-3 * want, "{name}: {got} vs {want}");
+    }
+    assert!(
+        !v["free"].to_string().contains("\"delta\""),
+        "{}",
+        v["free"]
+    );
+    // held away from the truth: the gain stays where it is held, the
+    // others move to compensate and the fit is worse
+    let w = run(&held);
+    assert_eq!(w["parameters"]["gain"].as_f64(), Some(1.5 * t.gain), "{w}");
+    let rms = |d: &serde_json::Value| d["estimation"]["rms"].as_f64().unwrap();
+    assert!(rms(&w) > 10.0 * rms(&v), "{} vs {}", rms(&w), rms(&v));
+    let m = std::fs::read_to_string(&model).unwrap();
+    assert!(m.contains(&format!("input_gain = {}", 1.5 * t.gain)), "{m}");
+}
+
 #[test]
 fn bad_input_one_line_nothing_written() {
     let dir = tempfile::tempdir().unwrap();
@@ -203,6 +260,23 @@ fn bad_input_one_line_nothing_written() {
     a[12] = "nope".into();
     run(a, "not a model");
     run(base("a:b", "", &[]), "is not a range");
+    run(
+        base("0:2000", "", &["--fix", "zeta=1"]),
+        "--fix zeta: not a parameter",
+    );
+    run(base("0:2000", "", &["--fix", "delta"]), "is not NAME=VALUE");
+    run(
+        base("0:2000", "", &["--fix", "delta=x"]),
+        "'x' is not a number",
+    );
+    run(
+        base("0:2000", "", &["--fix", "delta=1", "--fix", "delta=2"]),
+        "given twice",
+    );
+    run(
+        base("0:2000", "", &["--fix", "delta=-1"]),
+        "inside its bounds",
+    );
     let mut a = base("0:2000", "2000:2500", &["--test", "2500:3000"]);
     a.push("--predict".into());
     a.push(dir.path().join("p.csv").to_str().unwrap().into());

@@ -106,7 +106,10 @@ pub fn decay<'py>(
 /// input between samples (part of the model); `substeps` fixes the RK4
 /// steps per sample (default: chosen so that the integration error is at
 /// most 1 % of the RMS output error; the document's "integration" says
-/// which). Returns the document (dict): parameters, intervals, RMS errors.
+/// which). `fix` holds model parameters at values instead of fitting them
+/// (`{"delta": 0.0}`, as `fit-time --fix delta=0`; names alpha ...
+/// output_offset). Returns the document (dict): parameters, intervals, RMS
+/// errors.
 ///
 /// >>> import numpy as np, nlsdof
 /// >>> u = np.random.default_rng(0).standard_normal(1000)
@@ -115,7 +118,7 @@ pub fn decay<'py>(
 /// >>> r["converged"], round(r["parameters"]["alpha"], 1), round(r["parameters"]["delta"], 3)
 /// (True, 987.0, 2.0)
 #[pyfunction]
-#[pyo3(signature = (u, y, fs, model="duffing", fit_range=None, tests=None, starts=1, seed=1, max_iterations=400, input_interpolation="cubic", substeps=None, progress=None))]
+#[pyo3(signature = (u, y, fs, model="duffing", fit_range=None, tests=None, starts=1, seed=1, max_iterations=400, input_interpolation="cubic", substeps=None, progress=None, fix=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit_time<'py>(
     py: Python<'py>,
@@ -131,8 +134,19 @@ pub fn fit_time<'py>(
     input_interpolation: &str,
     substeps: Option<usize>,
     progress: Option<&Bound<'py, PyAny>>,
+    fix: Option<std::collections::BTreeMap<String, f64>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let t0 = Instant::now();
+    // as `fit-time --fix NAME=VALUE`
+    let mut fixed = Vec::new();
+    for (name, v) in fix.unwrap_or_default() {
+        let p = nlsdof::identification::time_domain::fixable_parameter(&name).ok_or_else(|| {
+            value_error(format!(
+                "fix {name:?}: not a parameter of fit_time (alpha, delta, beta, rho, kappa, eta, gain, input_offset, output_offset)"
+            ))
+        })?;
+        fixed.push((p, v));
+    }
     let interpolation = InputInterpolation::parse(input_interpolation).ok_or_else(|| {
         value_error(format!(
             "input_interpolation {input_interpolation:?} is not an interpolation: cubic, linear or zoh"
@@ -176,6 +190,7 @@ pub fn fit_time<'py>(
         seed,
         interpolation,
         substeps,
+        fixed,
         ..TimeFitOptions::default()
     };
     opts.lm.max_iterations = max_iterations;

@@ -834,6 +834,16 @@ def test_fit_time_equals_cli(cli, tmp_path):
     xs, _ = m.simulate(u[4000:6000], fs, x0=init["x0"], v0=init["v0"])
     y = xs + m.signal["output_offset"]
     assert np.max(np.abs(y - y_model)) < 1e-9 * np.max(np.abs(y_model))
+    # fix= is the CLI's --fix: a held parameter keeps its value, the same document
+    held = json.loads(run_cli(cli, "fit-time", "--input", path, "--input-column", "u", "--output-column",
+                              "y", "--fs", fs, "--range", "0:4000", "--fix", "delta=1.5", "--json"))
+    mine = nlsdof.fit_time(u, x, fs=fs, fit_range=(0, 4000), fix={"delta": 1.5})
+    assert drop_run_keys(mine) == drop_run_keys(held)
+    assert mine["parameters"]["delta"] == 1.5 and "delta" not in mine["free"]
+    with pytest.raises(ValueError, match="not a parameter of fit_time"):
+        nlsdof.fit_time(u, x, fs=fs, fix={"zeta": 0.0})
+    with pytest.raises(ValueError, match="inside its bounds"):
+        nlsdof.fit_time(u, x, fs=fs, fix={"delta": -1.0})
 
 
 # ------------------------------------------------------------ examples

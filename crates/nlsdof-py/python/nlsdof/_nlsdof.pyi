@@ -13,7 +13,7 @@ DataFrames and Axes are ``Any``.
 """
 
 import os
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar, Protocol, final, overload
 
 import numpy as np
@@ -570,6 +570,7 @@ def fit_time(
     input_interpolation: str = "cubic",
     substeps: int | None = None,
     progress: _Progress = None,
+    fix: Mapping[str, float] | None = None,
 ) -> Report: ...
 def inspect(data: _Data, phase: str = "auto", min_jump_ratio: float = 1.2) -> Report: ...
 def read_uff(

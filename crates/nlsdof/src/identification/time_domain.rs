@@ -229,6 +229,15 @@ pub const TIME_PARAM_NAMES: [&str; N_TIME_PARAMS] = [
     "v0",
 ];
 
+/// The index in θ of a model parameter that [`TimeFitOptions::fixed`] may
+/// hold, by its name in [`TIME_PARAM_NAMES`] (`alpha` … `output_offset`;
+/// not the initial state). `None` for any other name.
+pub fn fixable_parameter(name: &str) -> Option<usize> {
+    TIME_PARAM_NAMES[..=OUTPUT_OFFSET]
+        .iter()
+        .position(|n| *n == name)
+}
+
 /// Upper bound of the exponents in the fit.
 pub const MAX_EXPONENT: f64 = 20.0;
 

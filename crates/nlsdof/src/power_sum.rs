@@ -130,14 +130,19 @@ impl PowerSum {
         let mut v: Vec<(f64, f64)> = terms.into_iter().collect();
         debug_assert!(v.iter().all(|(e, c)| e.is_finite() && c.is_finite()));
         v.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut exponents: Vec<f64> = Vec::with_capacity(v.len());
-        let mut coefficients: Vec<f64> = Vec::with_capacity(v.len());
-        for (e, c) in v {
-            if let Some(last) = exponents.last() {
-                if *last == e {
-                    *coefficients.last_mut().unwrap() += c;
-                    continue;
-                }
+        let n = v.len();
+        Self::from_sorted(v, n)
+    }
+
+    /// From terms sorted by exponent: equal exponents merged in order, zero
+    /// coefficients dropped.
+    fn from_sorted(terms: impl IntoIterator<Item = (f64, f64)>, capacity: usize) -> Self {
+        let mut exponents: Vec<f64> = Vec::with_capacity(capacity);
+        let mut coefficients: Vec<f64> = Vec::with_capacity(capacity);
+        for (e, c) in terms {
+            if exponents.last() == Some(&e) {
+                *coefficients.last_mut().unwrap() += c;
+                continue;
             }
             exponents.push(e);
             coefficients.push(c);
@@ -261,33 +266,14 @@ impl PowerSum {
         // exponents are sorted, and `e − e₁` rounds monotonically, so they
         // stay sorted (equal ones merged in order, as there).
         let e1 = self.exponents[0];
-        let n = self.len() - 1;
-        let mut exponents: Vec<f64> = Vec::with_capacity(n);
-        let mut coefficients: Vec<f64> = Vec::with_capacity(n);
-        for (e, c) in self.exponents.iter().zip(&self.coefficients).skip(1) {
-            let (e, c) = (e - e1, c * (e - e1));
-            if exponents.last() == Some(&e) {
-                *coefficients.last_mut().unwrap() += c;
-                continue;
-            }
-            exponents.push(e);
-            coefficients.push(c);
-        }
-        let mut i = 0;
-        while i < exponents.len() {
-            if coefficients[i] == 0.0 {
-                exponents.remove(i);
-                coefficients.remove(i);
-            } else {
-                i += 1;
-            }
-        }
-        let log_abs = coefficients.iter().map(|c| c.abs().ln()).collect();
-        Self {
-            exponents,
-            coefficients,
-            log_abs,
-        }
+        Self::from_sorted(
+            self.exponents
+                .iter()
+                .zip(&self.coefficients)
+                .skip(1)
+                .map(|(e, c)| (e - e1, c * (e - e1))),
+            self.len() - 1,
+        )
     }
 
     /// An interval `[T_lo, T_hi]` of `t = ln x` that contains every root

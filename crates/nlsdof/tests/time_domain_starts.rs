@@ -17,22 +17,9 @@ use support::fixtures::Rng;
 
 const FS: f64 = 200.0;
 
-/// A random-phase multisine, 0.5–15 Hz, RMS about 1 (seeded).
+/// The seeded multisine of the fixtures, sampled at [`FS`].
 fn multisine(n: usize, seed: u64) -> Vec<f64> {
-    let mut rng = Rng(seed);
-    let lines: Vec<(f64, f64)> = (1..=30)
-        .map(|k| (0.5 * k as f64, 2.0 * std::f64::consts::PI * rng.uniform()))
-        .collect();
-    let amp = (2.0 / lines.len() as f64).sqrt();
-    (0..n)
-        .map(|i| {
-            let t = i as f64 / FS;
-            lines
-                .iter()
-                .map(|(f, p)| amp * (2.0 * std::f64::consts::PI * f * t + p).sin())
-                .sum()
-        })
-        .collect()
+    support::fixtures::multisine(n, FS, seed)
 }
 
 /// A generalised model whose damping is `delta` plus a power law of

@@ -306,19 +306,7 @@ fn fit_is_deterministic_for_a_seed() {
 #[test]
 #[ignore]
 fn silverbox_duffing_beats_narx() {
-    let dir = std::env::var_os("SILVERBOX_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("../../../shared/data/silverbox")
-        });
-    let text = std::fs::read_to_string(dir.join("SNLS80mV.csv")).expect("Silverbox data");
-    let (mut u, mut y) = (Vec::new(), Vec::new());
-    for line in text.lines().skip(1).filter(|l| !l.trim().is_empty()) {
-        let mut f = line.split(',');
-        u.push(f.next().unwrap().trim().parse::<f64>().unwrap());
-        y.push(f.next().unwrap().trim().parse::<f64>().unwrap());
-    }
+    let (u, y) = support::fixtures::silverbox_record();
     let rec = TimeRecord::new(&u, &y, 610.3515625).unwrap();
     let f = fit_time_domain(
         &rec,

@@ -4,26 +4,14 @@
 //! κ, η, gain and the two offsets). Prints the estimation RMS, the three
 //! official test scores and the fitted parameters (docs/silverbox.md).
 
+mod support;
 use nlsdof::identification::time_domain::{
     fit_time_domain, predict_with, SampleRange, TimeFitOptions, TimeRecord, DELTA, TIME_PARAM_NAMES,
 };
 use nlsdof::identification::ModelKind;
 
 fn silverbox() -> (Vec<f64>, Vec<f64>) {
-    let dir = std::env::var_os("SILVERBOX_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("../../../shared/data/silverbox")
-        });
-    let text = std::fs::read_to_string(dir.join("SNLS80mV.csv")).expect("Silverbox data");
-    let (mut u, mut y) = (Vec::new(), Vec::new());
-    for line in text.lines().skip(1).filter(|l| !l.trim().is_empty()) {
-        let mut f = line.split(',');
-        u.push(f.next().unwrap().trim().parse::<f64>().unwrap());
-        y.push(f.next().unwrap().trim().parse::<f64>().unwrap());
-    }
-    (u, y)
+    support::fixtures::silverbox_record()
 }
 
 fn run(label: &str, opts: &TimeFitOptions) {

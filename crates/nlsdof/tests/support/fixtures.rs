@@ -71,6 +71,26 @@ pub fn hb_sweeps(
 /// SplitMix64 (Steele, Lea & Flood 2014): the one seeded generator of the
 /// tests, with uniform and standard normal deviates. Written here so the
 /// tests need no random-number crate; the sequence of a seed never changes.
+/// The Silverbox record SNLS80mV (u, y in volts) from `SILVERBOX_DIR` or
+/// `../shared/data/silverbox` beside the repository; panics when absent
+/// (the tests that read it are ignored by default).
+pub fn silverbox_record() -> (Vec<f64>, Vec<f64>) {
+    let dir = std::env::var_os("SILVERBOX_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../../shared/data/silverbox")
+        });
+    let text = std::fs::read_to_string(dir.join("SNLS80mV.csv")).expect("Silverbox data");
+    let (mut u, mut y) = (Vec::new(), Vec::new());
+    for line in text.lines().skip(1).filter(|l| !l.trim().is_empty()) {
+        let mut f = line.split(',');
+        u.push(f.next().unwrap().trim().parse::<f64>().unwrap());
+        y.push(f.next().unwrap().trim().parse::<f64>().unwrap());
+    }
+    (u, y)
+}
+
 /// A random-phase multisine sampled at `fs` Hz: 30 lines at 0.5, 1, …,
 /// 15 Hz, RMS about 1 (seeded); the input of the time-domain tests.
 pub fn multisine(n: usize, fs: f64, seed: u64) -> Vec<f64> {

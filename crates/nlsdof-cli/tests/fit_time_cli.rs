@@ -150,7 +150,7 @@ fn fits_predicts_and_simulate_reproduces_the_prediction() {
     assert!(err < 1e-9 * scale, "simulate vs prediction: {err:e}");
 }
 
-/// `--fix NAME=VALUE` holds a parameter: held at its true value the others
+/// `--fix name=value` holds a parameter: held at its true value the others
 /// are still recovered, the held value is in the document and the model
 /// file, and it is not among the free parameters.
 #[test]
@@ -264,13 +264,13 @@ fn bad_input_one_line_nothing_written() {
         base("0:2000", "", &["--fix", "zeta=1"]),
         "--fix zeta: not a parameter",
     );
-    run(base("0:2000", "", &["--fix", "delta"]), "is not NAME=VALUE");
+    run(base("0:2000", "", &["--fix", "delta"]), "is not name=value");
     run(
         base("0:2000", "", &["--fix", "delta=x"]),
         "'x' is not a number",
     );
     run(
-        base("0:2000", "", &["--fix", "delta=1", "--fix", "delta=2"]),
+        base("0:2000", "", &["--fix", "delta=1,delta=2"]),
         "given twice",
     );
     run(

@@ -369,6 +369,23 @@ or a rank-deficient Jacobian at the optimum) are reported as an error naming the
         .to_string()
 }
 
+/// The items of a `--fix name=value,..` list (`fit`, `phase-resonance`,
+/// `fit-time`): names trimmed and lowercased, values parsed.
+pub fn fix_items(list: &str) -> Result<Vec<(String, f64)>, CliError> {
+    list.split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|item| {
+            let (name, value) = item
+                .split_once('=')
+                .ok_or_else(|| CliError::Usage(format!("--fix '{item}' is not name=value")))?;
+            let v: f64 = value.trim().parse().map_err(|_| {
+                CliError::Usage(format!("--fix {name}: '{}' is not a number", value.trim()))
+            })?;
+            Ok((name.trim().to_ascii_lowercase(), v))
+        })
+        .collect()
+}
+
 /// Parses `--fix`; returns the mass if given there.
 pub fn apply_fix_free(
     spec: &mut FitSpec,
@@ -377,14 +394,7 @@ pub fn apply_fix_free(
 ) -> Result<Option<f64>, CliError> {
     let mut mass = None;
     if let Some(list) = fix {
-        for item in list.split(',').filter(|s| !s.trim().is_empty()) {
-            let (name, value) = item
-                .split_once('=')
-                .ok_or_else(|| CliError::Usage(format!("--fix '{item}' is not name=value")))?;
-            let v: f64 = value.trim().parse().map_err(|_| {
-                CliError::Usage(format!("--fix {name}: '{}' is not a number", value.trim()))
-            })?;
-            let n = name.trim().to_ascii_lowercase();
+        for (n, v) in fix_items(list)? {
             if n == "m" || n == "mass" {
                 if !(v.is_finite() && v > 0.0) {
                     return Err(CliError::Usage(format!(

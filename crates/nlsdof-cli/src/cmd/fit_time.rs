@@ -78,11 +78,11 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub integration_tolerance: f64,
-    /// Hold a model parameter at a value instead of fitting it, NAME=VALUE (may be repeated;
-    /// names alpha, delta, beta, rho, kappa, eta, gain, input_offset, output_offset, per unit
-    /// mass in SI units), e.g. --fix delta=0 for pure power-law damping.
-    #[arg(long, value_name = "NAME=VALUE", allow_hyphen_values = true)]
-    pub fix: Vec<String>,
+    /// Hold model parameters at values instead of fitting them: name=value,.. (alpha, delta,
+    /// beta, rho, kappa, eta, gain, input_offset, output_offset; per unit mass, SI units),
+    /// e.g. --fix delta=0 for pure power-law damping.
+    #[arg(long, value_name = "NAME=VALUE,..", allow_hyphen_values = true)]
+    pub fix: Option<String>,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -259,7 +259,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         interpolation,
         substeps: a.substeps,
         integration_tolerance: a.integration_tolerance,
-        fixed: parse_fixed(&a.fix)?,
+        fixed: parse_fixed(a.fix.as_deref())?,
         ..TimeFitOptions::default()
     };
     opts.lm.max_iterations = a.max_iterations;
@@ -335,21 +335,14 @@ pub fn run(a: Args) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `--fix NAME=VALUE` items as [`TimeFitOptions::fixed`] entries.
-fn parse_fixed(items: &[String]) -> Result<Vec<(usize, f64)>, CliError> {
+/// `--fix name=value,..` as [`TimeFitOptions::fixed`] entries.
+fn parse_fixed(list: Option<&str>) -> Result<Vec<(usize, f64)>, CliError> {
     let mut out: Vec<(usize, f64)> = Vec::new();
-    for item in items {
-        let (name, value) = item
-            .split_once('=')
-            .ok_or_else(|| CliError::Usage(format!("--fix '{item}' is not NAME=VALUE")))?;
-        let name = name.trim();
-        let p = nlsdof::identification::time_domain::fixable_parameter(name).ok_or_else(|| {
+    for (name, v) in crate::cmd::fit::fix_items(list.unwrap_or(""))? {
+        let p = nlsdof::identification::time_domain::fixable_parameter(&name).ok_or_else(|| {
             CliError::Usage(format!(
                 "--fix {name}: not a parameter of fit-time (alpha, delta, beta, rho, kappa, eta, gain, input_offset, output_offset)"
             ))
-        })?;
-        let v: f64 = value.trim().parse().map_err(|_| {
-            CliError::Usage(format!("--fix {name}: '{}' is not a number", value.trim()))
         })?;
         if out.iter().any(|&(q, _)| q == p) {
             return Err(CliError::Usage(format!("--fix {name} is given twice")));

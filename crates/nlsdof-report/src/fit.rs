@@ -785,6 +785,9 @@ pub fn result_json(
         "at_bounds": res.at_bounds,
         "unidentifiable": res.unidentifiable,
         "intervals_valid": valid,
+        // the model does not fit its noise: the worst residual over noise
+        // (null when it fits); intervals are then not valid
+        "misfit": res.misfit,
         "warning": res.warning(),
         "notes": res.notes(),
         "ridges": res.ridges.iter().map(|r| json!({"parameters": [r.first, r.second], "correlation": r.correlation, "remedy": r.remedy()})).collect::<Vec<_>>(),
@@ -969,7 +972,13 @@ fn result_text_body(
         mass,
         chosen,
     );
-    if res.uncertainty.is_some() && !res.intervals_valid() {
+    if let Some(r) = res.misfit {
+        writeln!(
+            s,
+            "intervals: not shown (the model does not fit its noise, residual {r:.1}x: an interval would describe the noise, not the misfit; see the first line)"
+        )
+        .ok();
+    } else if res.uncertainty.is_some() && !res.intervals_valid() {
         writeln!(
             s,
             "intervals: not shown (the fit is not trustworthy, see the first line)"

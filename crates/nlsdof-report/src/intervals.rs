@@ -85,8 +85,11 @@ pub fn chosen(res: &FitResult, profiles: &[OutputErrorProfile]) -> [Option<Inter
         if res.status[j] == Status::Absent {
             return None;
         }
+        // (a model that does not fit its noise has no valid interval of
+        // any method: each assumes residuals that are noise)
         profiles
             .iter()
+            .filter(|_| res.misfit.is_none())
             .find(|p| p.parameter as usize == j && p.refusal().is_none())
             .map(|p| Interval {
                 lower: p.lower,
@@ -140,7 +143,7 @@ pub fn default_text(id: &Identification, profiles: &[OutputErrorProfile]) -> Str
         }
     }
     let others = id.rho_profile.is_some() || id.eta_profile.is_some() || !profiles.is_empty();
-    if others {
+    if others && id.fit.misfit.is_none() {
         writeln!(
             s,
             "intervals: one 95 % interval per parameter, its method named; the others (each with what it leaves out): --intervals all (Python: intervals=\"all\")"
@@ -160,6 +163,13 @@ pub fn all_text(id: &Identification, profiles: &[OutputErrorProfile]) -> String 
         "\n95 % intervals, every method (each leaves something out):"
     )
     .ok();
+    if let Some(r) = res.misfit {
+        writeln!(
+            s,
+            "  NONE IS VALID: the model does not fit its noise (residual {r:.1}x); every interval below assumes residuals that are noise"
+        )
+        .ok();
+    }
     let mut methods = Vec::new();
     for j in 0..N_PARAMS {
         if res.status[j] != Status::Free {

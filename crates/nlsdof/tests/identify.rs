@@ -650,3 +650,40 @@ fn likely_unit_mistakes_are_named_first() {
     let hint = r.unit_hint().expect("a hint for amplitudes in mm");
     assert!(hint.contains("in mm"), "{hint}");
 }
+
+/// A model that does not fit its noise has no valid intervals
+/// (`FitResult::misfit`): a linear model fitted to hardening Duffing data
+/// with 1 % amplitude noise is far above the noise, so `intervals_valid()`
+/// is false and `misfit` carries the residual over the noise; the Duffing
+/// model on the same data fits its noise and keeps its intervals.
+#[test]
+fn a_model_that_does_not_fit_its_noise_has_no_valid_intervals() {
+    let wn = TWO_PI * 10.0;
+    let t = Parameters::from([wn * wn, 2.0 * 0.02 * wn, 1.0e6, 2.0, 0.0, 0.0, 1.0]);
+    let mut d = data(
+        &t,
+        &[0.5, 1.0, 2.0],
+        (8.0, 13.0),
+        150,
+        &[SweepDirection::Up],
+        None,
+    );
+    let mut rng = support::fixtures::Rng(0x5eed_0024);
+    for c in &mut d.curves {
+        for a in &mut c.amplitudes {
+            *a *= 1.0 + 0.01 * rng.normal();
+        }
+    }
+    let lin = identify(&d, &FitPlan::new(ModelKind::Linear), &|_| {}).unwrap();
+    assert!(!lin.adequacy.adequate);
+    let r = lin.fit.misfit.expect("a misfit is recorded on the fit");
+    assert!(
+        r > nlsdof::identification::identify::ADEQUACY_CURVE.sqrt(),
+        "residual/noise {r}"
+    );
+    assert!(lin.fit.uncertainty.is_some() && !lin.fit.intervals_valid());
+    let duf = identify(&d, &FitPlan::new(ModelKind::Duffing), &|_| {}).unwrap();
+    assert!(duf.adequacy.adequate, "{:?}", duf.adequacy_message());
+    assert_eq!(duf.fit.misfit, None);
+    assert!(duf.fit.intervals_valid(), "{:?}", duf.fit.warning());
+}

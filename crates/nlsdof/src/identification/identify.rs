@@ -1048,7 +1048,18 @@ pub fn identify(
         best = bake_phase_offset(best, &mut fit_data, &mut refine_data, conv)?;
     }
     cancel.check()?;
-    let Fitted { fit, spec, .. } = best;
+    let Fitted { mut fit, spec, .. } = best;
+    // a fit that does not fit its noise has no valid intervals
+    // (`FitResult::misfit`)
+    fit.misfit = (!adequacy.adequate).then(|| {
+        adequacy.needs_early_jumps.unwrap_or_else(|| {
+            adequacy
+                .failing
+                .iter()
+                .map(|&i| curves[i].noise.ratio())
+                .fold(adequacy.ratio.max(adequacy.peak_ratio), f64::max)
+        })
+    });
     let start_node = start_node.map(|(i, j)| (ex.land.rho[i], ex.land.eta[j]));
     Ok(Identification {
         fit,
@@ -2687,7 +2698,7 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
         return failed();
     };
     let wp = f.spec.phase_weight.is_some();
-    let nm = noise_model(data, &e.residuals, wp);
+    let nm = noise_model(data, &e.residuals, wp).with_precision_floor(data);
     let pens: Vec<Vec<f64>> = matches.iter().map(|c| c.penalties.clone()).collect();
     let z = z2_per_curve(data, &e.residuals, wp, &pens, &nm);
     let mut curves = Vec::with_capacity(data.curves.len());

@@ -502,7 +502,34 @@ fn unconverged_fit_says_so_first() {
         second.starts_with("WARNING:") && second.contains("at bounds: rho"),
         "{text}"
     );
-    assert!(text.contains("intervals: not shown"), "{text}");
+    assert!(
+        text.contains("intervals: not shown (the model does not fit its noise"),
+        "{text}"
+    );
+}
+
+/// A model that does not fit its noise has no valid intervals, whatever
+/// else holds: the linear model on the Duffing data converges at no bound,
+/// and its JSON says `intervals_valid: false` with the residual over the
+/// noise under `misfit`; every parameter's reported interval is null.
+#[test]
+fn a_misfit_has_no_valid_intervals() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, _) = write_csv(dir.path());
+    let o = Command::cargo_bin("nlsdof")
+        .unwrap()
+        .args(["fit", csv.to_str().unwrap(), "--model", "linear", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["adequacy"]["adequate"], false, "{}", v["adequacy"]);
+    let r = v["misfit"].as_f64().expect("misfit is a number");
+    assert!(r > 2.5, "{r}");
+    assert_eq!(v["intervals_valid"], false);
+    for p in v["parameters"].as_array().unwrap() {
+        assert!(p["interval"].is_null(), "{p}");
+    }
 }
 
 /// `fit --profile`: output-error profile intervals of the free exponent,

@@ -1261,6 +1261,10 @@ pub struct TimeFit {
     pub start_rms: f64,
     pub rms: f64,
     pub cost: f64,
+    /// How the local fit that produced θ ended, and its LM iterations: the
+    /// last local fit (the free-exponent stage's winner, or its refit at
+    /// more substeps when the integration check asked for one:
+    /// [`IntegrationCheck::refits`]), not the sum over the stages.
     pub termination: Termination,
     pub iterations: usize,
     /// `None` when `JᵀJ` is singular at the optimum.

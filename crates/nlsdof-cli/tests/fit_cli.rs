@@ -518,7 +518,15 @@ fn a_misfit_has_no_valid_intervals() {
     let (csv, _) = write_csv(dir.path());
     let o = Command::cargo_bin("nlsdof")
         .unwrap()
-        .args(["fit", csv.to_str().unwrap(), "--model", "linear", "--json"])
+        .args([
+            "fit",
+            csv.to_str().unwrap(),
+            "--model",
+            "linear",
+            "--json",
+            "--out",
+        ])
+        .arg(dir.path().join("model.toml"))
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -530,6 +538,15 @@ fn a_misfit_has_no_valid_intervals() {
     for p in v["parameters"].as_array().unwrap() {
         assert!(p["interval"].is_null(), "{p}");
     }
+    // the model file says so in its header, with the same number
+    let file = std::fs::read_to_string(dir.path().join("model.toml")).unwrap();
+    let head = file.lines().next().unwrap();
+    assert!(
+        head.contains(&format!(
+            "DOES NOT FIT its data: residual {r:.1}x the noise"
+        )),
+        "{head}"
+    );
 }
 
 /// `fit --profile`: output-error profile intervals of the free exponent,

@@ -524,10 +524,13 @@ pub fn model_file_text(
         "# fitted by `nlsdof fit`, model {}, cost {:.6e}{}\n",
         res.kind,
         res.cost,
-        if res.warning().is_some() {
-            " (NOT CONVERGED or not identifiable: see the fit report)"
-        } else {
-            ""
+        match res.misfit {
+            Some(r) =>
+                format!(" (DOES NOT FIT its data: residual {r:.1}x the noise; see the fit report)"),
+            None if res.warning().is_some() => {
+                " (NOT CONVERGED or not identifiable: see the fit report)".to_string()
+            }
+            None => String::new(),
         },
     );
     if mass.is_none() {
@@ -785,8 +788,8 @@ pub fn result_json(
         "at_bounds": res.at_bounds,
         "unidentifiable": res.unidentifiable,
         "intervals_valid": valid,
-        // the model does not fit its noise: the worst residual over noise
-        // (null when it fits); intervals are then not valid
+        // the model does not fit its noise: the residual over the noise the
+        // first line quotes (null when it fits); intervals are then not valid
         "misfit": res.misfit,
         "warning": res.warning(),
         "notes": res.notes(),

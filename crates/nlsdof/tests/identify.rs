@@ -682,6 +682,9 @@ fn a_model_that_does_not_fit_its_noise_has_no_valid_intervals() {
         "residual/noise {r}"
     );
     assert!(lin.fit.uncertainty.is_some() && !lin.fit.intervals_valid());
+    // the number the first line quotes
+    let msg = lin.adequacy_message().unwrap();
+    assert!(msg.contains(&format!("residual {r:.1}x")), "{msg} vs {r}");
     let duf = identify(&d, &FitPlan::new(ModelKind::Duffing), &|_| {}).unwrap();
     assert!(duf.adequacy.adequate, "{:?}", duf.adequacy_message());
     assert_eq!(duf.fit.misfit, None);

@@ -353,7 +353,7 @@ off along a ridge (|r| >= 0.999: named, with what would separate them); 95 % int
 a physical bound (delta < 0, gain < 0); natural bounds reported as results (eta = -1: Coulomb \
 friction); terms that vanished (eta when kappa goes to 0, rho when beta goes to 0). Any of these \
 sets intervals_valid false, and so does a model that does not fit its noise (JSON misfit: the \
-worst residual over the noise; every interval assumes residuals that are noise). A fit that is fine says nothing alarming.\n\n\
+residual over the noise quoted on the first line; every interval assumes residuals that are noise). A fit that is fine says nothing alarming.\n\n\
 NONLINEAR STIFFNESS SIGN: from the data by default (--sign data: each candidate takes the sign of its \
 equation-error beta); --sign hardening|softening holds it (softening: bounds apply to |beta_ref|, \
 whose upper default is 0.95 alpha0); --sign auto races both signs through the same stages (both \

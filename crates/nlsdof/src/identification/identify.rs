@@ -650,6 +650,29 @@ pub struct Adequacy {
     pub needs_early_jumps: Option<f64>,
 }
 
+impl Adequacy {
+    /// The residual over the noise that the first line quotes: the worst
+    /// failing curve's; the resonance peaks' when only they fail; else the
+    /// whole set's. (For a fit that fits only with early jumps, the line
+    /// quotes [`Self::needs_early_jumps`] instead.)
+    pub fn quoted_ratio(&self, curves: &[CurveReport]) -> f64 {
+        if !self.failing.is_empty() {
+            return self
+                .failing
+                .iter()
+                .filter_map(|&i| curves.get(i))
+                .map(|c| c.noise.ratio())
+                .fold(0.0f64, f64::max);
+        }
+        let peaks_fail = !(self.peak_ratio.powi(2) <= ADEQUACY_PEAKS);
+        if peaks_fail && self.ratio.powi(2) <= ADEQUACY_ALL {
+            self.peak_ratio
+        } else {
+            self.ratio
+        }
+    }
+}
+
 /// The outcome of [`identify`].
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Identification {
@@ -1052,13 +1075,9 @@ pub fn identify(
     // a fit that does not fit its noise has no valid intervals
     // (`FitResult::misfit`)
     fit.misfit = (!adequacy.adequate).then(|| {
-        adequacy.needs_early_jumps.unwrap_or_else(|| {
-            adequacy
-                .failing
-                .iter()
-                .map(|&i| curves[i].noise.ratio())
-                .fold(adequacy.ratio.max(adequacy.peak_ratio), f64::max)
-        })
+        adequacy
+            .needs_early_jumps
+            .unwrap_or_else(|| adequacy.quoted_ratio(&curves))
     });
     let start_node = start_node.map(|(i, j)| (ex.land.rho[i], ex.land.eta[j]));
     Ok(Identification {

@@ -176,8 +176,9 @@ pub struct FitResult {
     /// Exponents without effect (their coefficient went to 0), held.
     pub inactive: Vec<flags::Inactive>,
     /// Set by the identification's self-check ([`identify::Adequacy`]) when
-    /// the model does not fit its data: the worst residual in units of the
-    /// noise (of the fit read exactly, when it fits only with early jumps:
+    /// the model does not fit its data: the residual in units of the noise
+    /// that the first line quotes ([`identify::Adequacy::quoted_ratio`]; of
+    /// the fit read exactly, when it fits only with early jumps:
     /// [`identify::Adequacy::needs_early_jumps`]). The intervals are then not valid: the linearised (and
     /// sandwich) intervals assume residuals that are noise, and a model far
     /// from its data has an optimum that moves with details no interval

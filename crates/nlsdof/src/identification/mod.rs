@@ -179,12 +179,13 @@ pub struct FitResult {
     /// the model does not fit its data: the residual in units of the noise
     /// that the first line quotes ([`identify::Adequacy::quoted_ratio`]; of
     /// the fit read exactly, when it fits only with early jumps:
-    /// [`identify::Adequacy::needs_early_jumps`]). The intervals are then not valid: the linearised (and
-    /// sandwich) intervals assume residuals that are noise, and a model far
-    /// from its data has an optimum that moves with details no interval
-    /// describes (measured on the 24 °C beam, residual 1268x the noise:
-    /// ρ's Wald interval was ±0.007 while amplitudes scaled by 1 + k·1e-15
-    /// moved ρ between 1.27 and 1.90; docs/identification.md).
+    /// [`identify::Adequacy::needs_early_jumps`]). The intervals are then
+    /// not valid: the linearised (and sandwich) intervals assume residuals
+    /// that are noise, and a model far from its data has an optimum that
+    /// moves with details no interval describes (measured on the 24 °C
+    /// beam, residual 1268x the noise: ρ's Wald interval was ±0.007 while
+    /// amplitudes scaled by 1 + k·1e-15 moved ρ between 1.267 and 1.912;
+    /// docs/identification.md, example `rounding_sensitivity`).
     #[serde(default)]
     pub misfit: Option<f64>,
 }

@@ -918,3 +918,16 @@ def test_the_readme_python_example_runs(tmp_path):
                          timeout=600)
     assert out.returncode == 0, out.stderr
     assert "'value'" in out.stdout and "'interval'" in out.stdout
+
+
+@pytest.mark.skipif(not BEAM_24C.exists(), reason="needs ../shared/data beside the repository")
+def test_a_model_that_does_not_fit_its_noise_has_no_intervals():
+    # the 24 °C beam's Duffing fit is flagged "does not fit" (the first line
+    # quotes the residual over the noise): no interval, as on the CLI
+    r = nlsdof.fit(nlsdof.read_beam_dir(BEAM_24C), model="duffing")
+    d = r.to_dict()
+    assert d["intervals_valid"] is False and d["adequacy"]["adequate"] is False
+    first = r.report().splitlines()[0]
+    assert first.startswith("WARNING: the model does not fit"), first
+    assert f"residual {d['misfit']:.1f}x the noise" in first, (first, d["misfit"])
+    assert all(p["interval"] is None for p in r.parameters.values())

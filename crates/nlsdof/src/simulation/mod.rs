@@ -283,10 +283,11 @@ pub fn simulate<F: FnMut(Sample)>(
     simulate_cancellable(model, input, opts, crate::cancel::Cancel::NEVER, sink)
 }
 
-/// As [`simulate`]; [`Method::DormandPrince`] polls `cancel` every 4096
-/// samples and then ends with [`SimulationError::Interrupted`]
-/// ([`crate::cancel`]). ([`Method::Rk4`] runs to the end: `cancel` is
-/// checked once it has.)
+/// As [`simulate`], polling `cancel` ([`Method::DormandPrince`] every 4096
+/// samples, [`Method::Rk4`] every 65,536) and then ending with
+/// [`SimulationError::Interrupted`] ([`crate::cancel`]); the samples
+/// already given to `sink` are those of the run so far. The results of a
+/// run that is not cancelled do not depend on it.
 pub fn simulate_cancellable<F: FnMut(Sample)>(
     model: &(impl AsNormalised + ?Sized),
     input: &SampledInput<'_>,
@@ -299,7 +300,7 @@ pub fn simulate_cancellable<F: FnMut(Sample)>(
     check_options(opts)?;
     let summary = match opts.method {
         Method::Rk4 { samples_per_step } => {
-            rk4::simulate_sampled(model, input, samples_per_step, opts, sink)
+            rk4::simulate_sampled(model, input, samples_per_step, opts, cancel, sink)
         }
         Method::DormandPrince { rtol, atol } => {
             dopri::simulate_sampled(model, input, rtol, atol, opts, cancel, sink)

@@ -5,6 +5,7 @@ use super::coulomb::{self, Mode};
 use super::law::{dispatch, Dyn, Law, MulAdd, NoFma, Visit};
 use super::rk4_step::step;
 use super::{is_coulomb, Options, Sample, SimulationError, State, Summary};
+use crate::cancel::Cancel;
 use crate::excitation::{Excitation, Grid, SampledInput};
 use crate::model::NormalisedModel;
 
@@ -40,8 +41,13 @@ struct SampledRun<'i, 'a, F> {
     input: &'i SampledInput<'a>,
     stride: usize,
     opts: Options,
+    cancel: Cancel,
     sink: F,
 }
+
+/// Samples between two polls of the cancel flag in an RK4 run over a
+/// record (an atomic load; the results do not depend on it).
+const CANCEL_EVERY: usize = 1 << 16;
 
 impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
     type Out = Result<Summary, SimulationError>;
@@ -50,6 +56,7 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
             input,
             stride,
             opts,
+            cancel,
             mut sink,
         } = self;
         match (input.grid(), stride) {
@@ -67,6 +74,7 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
                             t0,
                             fs,
                             &opts,
+                            cancel,
                             &mut sink,
                         )
                     };
@@ -78,19 +86,34 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
                     t0,
                     fs,
                     &opts,
+                    cancel,
                     &mut sink,
                 )
             }
-            (Grid::Uniform { t0, fs }, 2) => {
-                uniform2(&d, input.raw(), input.gain(), t0, fs, &opts, &mut sink)
-            }
-            (Grid::Uniform { t0, fs }, _) => {
-                uniform1(&d, input.raw(), input.gain(), t0, fs, &opts, &mut sink)
-            }
+            (Grid::Uniform { t0, fs }, 2) => uniform2(
+                &d,
+                input.raw(),
+                input.gain(),
+                t0,
+                fs,
+                &opts,
+                cancel,
+                &mut sink,
+            ),
+            (Grid::Uniform { t0, fs }, _) => uniform1(
+                &d,
+                input.raw(),
+                input.gain(),
+                t0,
+                fs,
+                &opts,
+                cancel,
+                &mut sink,
+            ),
             (Grid::Times(_), 2) => Err(SimulationError::StrideNeedsUniformSampling {
                 samples_per_step: 2,
             }),
-            (Grid::Times(ts), _) => times1(&d, input, ts, &opts, &mut sink),
+            (Grid::Times(ts), _) => times1(&d, input, ts, &opts, cancel, &mut sink),
         }
     }
 }
@@ -102,6 +125,7 @@ fn uniform1<S: Law, D: Law, F: FnMut(Sample)>(
     t0: f64,
     fs: f64,
     opts: &Options,
+    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
     let h = 1.0 / fs;
@@ -118,6 +142,9 @@ fn uniform1<S: Law, D: Law, F: FnMut(Sample)>(
     let mut outputs = 1;
     let mut dec = Decimator::new(opts.decimation);
     for (i, &ui) in vals.iter().enumerate().skip(1) {
+        if i % CANCEL_EVERY == 0 {
+            cancel.check()?;
+        }
         let u1 = g * ui;
         let a1 = u0 - d.internal(x, v);
         (x, v) = step(d, x, v, a1, h, 0.5 * (u0 + u1), u1);
@@ -266,6 +293,7 @@ fn uniform2<S: Law, D: Law, F: FnMut(Sample)>(
     t0: f64,
     fs: f64,
     opts: &Options,
+    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
     let dt = 1.0 / fs;
@@ -289,6 +317,9 @@ fn uniform2<S: Law, D: Law, F: FnMut(Sample)>(
     let rhs: u64 = 1;
     let mut i = 0;
     while i + 2 < n {
+        if i % CANCEL_EVERY == 0 {
+            cancel.check()?;
+        }
         let um = g * vals[i + 1];
         let u1 = g * vals[i + 2];
         let (xn, vn) = step(d, x, v, a0, h, um, u1);
@@ -330,9 +361,10 @@ unsafe fn uniform2_predicted_fma<S: Law, D: Law, F: FnMut(Sample)>(
     t0: f64,
     fs: f64,
     opts: &Options,
+    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
-    uniform2_predicted::<S, D, F, super::law::HwFma>(d, vals, g, t0, fs, opts, sink)
+    uniform2_predicted::<S, D, F, super::law::HwFma>(d, vals, g, t0, fs, opts, cancel, sink)
 }
 
 /// [`uniform2`] for real exponents, with the powers taken off the critical
@@ -354,6 +386,7 @@ fn uniform2_predicted<S: Law, D: Law, F: FnMut(Sample), M: MulAdd>(
     t0: f64,
     fs: f64,
     opts: &Options,
+    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
     let dt = 1.0 / fs;
@@ -380,6 +413,9 @@ fn uniform2_predicted<S: Law, D: Law, F: FnMut(Sample), M: MulAdd>(
     let (mut nxt_m, mut nxt_e) = (cur_m, cur_e);
     let mut i = 0;
     for pair in vals[1..].chunks_exact(2) {
+        if i % CANCEL_EVERY == 0 {
+            cancel.check()?;
+        }
         let um = g * pair[0];
         let u1 = g * pair[1];
         // classical RK4 stages, powers continued from the references
@@ -434,6 +470,7 @@ fn times1<S: Law, D: Law, F: FnMut(Sample)>(
     input: &SampledInput<'_>,
     ts: &[f64],
     opts: &Options,
+    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
     let n = ts.len();
@@ -449,6 +486,9 @@ fn times1<S: Law, D: Law, F: FnMut(Sample)>(
     let mut outputs = 1;
     let mut dec = Decimator::new(opts.decimation);
     for i in 1..n {
+        if i % CANCEL_EVERY == 0 {
+            cancel.check()?;
+        }
         let u1 = input.value(i);
         let h = ts[i] - ts[i - 1];
         let a1 = u0 - d.internal(x, v);
@@ -487,6 +527,7 @@ struct CoulombSampled<'i, 'a, F> {
     input: &'i SampledInput<'a>,
     kappa: f64,
     opts: Options,
+    cancel: Cancel,
     sink: F,
 }
 
@@ -497,6 +538,7 @@ impl<F: FnMut(Sample)> Visit for CoulombSampled<'_, '_, F> {
             input,
             kappa,
             opts,
+            cancel,
             mut sink,
         } = self;
         let n = input.len();
@@ -517,6 +559,9 @@ impl<F: FnMut(Sample)> Visit for CoulombSampled<'_, '_, F> {
         };
         let mut dec = Decimator::new(opts.decimation);
         for i in 1..n {
+            if i % CANCEL_EVERY == 0 {
+                cancel.check()?;
+            }
             let (ta, tb) = (input.time(i - 1), input.time(i));
             let (ua, ub) = (input.value(i - 1), input.value(i));
             let h = tb - ta;
@@ -548,6 +593,7 @@ pub(crate) fn simulate_sampled<F: FnMut(Sample)>(
     input: &SampledInput<'_>,
     stride: usize,
     opts: &Options,
+    cancel: Cancel,
     sink: F,
 ) -> Result<Summary, SimulationError> {
     if is_coulomb(model) {
@@ -558,6 +604,7 @@ pub(crate) fn simulate_sampled<F: FnMut(Sample)>(
                 input,
                 kappa: model.kappa,
                 opts: *opts,
+                cancel,
                 sink,
             },
         )
@@ -569,6 +616,7 @@ pub(crate) fn simulate_sampled<F: FnMut(Sample)>(
                 input,
                 stride,
                 opts: *opts,
+                cancel,
                 sink,
             },
         )
@@ -682,21 +730,42 @@ mod tests {
     fn run_both<S: Law, D: Law>(d: Dyn<S, D>, u: &[f64], fs: f64) {
         let opts = Options::default();
         let (mut a, mut b, mut c) = (vec![], vec![], vec![]);
-        uniform2(&d, u, 1.0, 0.0, fs, &opts, &mut |s: Sample| {
-            a.push((s.x, s.v))
-        })
+        uniform2(
+            &d,
+            u,
+            1.0,
+            0.0,
+            fs,
+            &opts,
+            Cancel::NEVER,
+            &mut |s: Sample| a.push((s.x, s.v)),
+        )
         .unwrap();
-        uniform2_predicted::<S, D, _, NoFma>(&d, u, 1.0, 0.0, fs, &opts, &mut |s: Sample| {
-            b.push((s.x, s.v))
-        })
+        uniform2_predicted::<S, D, _, NoFma>(
+            &d,
+            u,
+            1.0,
+            0.0,
+            fs,
+            &opts,
+            Cancel::NEVER,
+            &mut |s: Sample| b.push((s.x, s.v)),
+        )
         .unwrap();
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("fma") && std::arch::is_x86_feature_detected!("avx2")
         {
             unsafe {
-                uniform2_predicted_fma(&d, u, 1.0, 0.0, fs, &opts, &mut |s: Sample| {
-                    c.push((s.x, s.v))
-                })
+                uniform2_predicted_fma(
+                    &d,
+                    u,
+                    1.0,
+                    0.0,
+                    fs,
+                    &opts,
+                    Cancel::NEVER,
+                    &mut |s: Sample| c.push((s.x, s.v)),
+                )
             }
             .unwrap();
         }

@@ -137,11 +137,9 @@ pub fn simulate_record(
     simulate_record_cancellable(model, values, grid, method, initial, sink, Cancel::NEVER)
 }
 
-/// As [`simulate_record`]; the default method ([`RecordMethod::Rk4Cubic`])
-/// polls `cancel` every 2^16 samples, [`RecordMethod::DormandPrince`]
-/// every 4096 samples, and then ends with [`SimulationError::Interrupted`]
-/// ([`crate::cancel`]). ([`RecordMethod::Rk4`] runs to the end: `cancel` is
-/// checked once it has.)
+/// As [`simulate_record`]; the RK4 methods poll `cancel` every 2^16
+/// samples, [`RecordMethod::DormandPrince`] every 4096 samples, and then
+/// end with [`SimulationError::Interrupted`] ([`crate::cancel`]).
 pub fn simulate_record_cancellable(
     model: &(impl AsNormalised + ?Sized),
     values: &[f64],
@@ -268,6 +266,62 @@ mod record_tests {
                 Cancel::NEVER,
             );
             assert!(ok.is_ok(), "{method:?}");
+        }
+    }
+
+    /// Every RK4 path polls the flag inside its loop (every 2^16 samples),
+    /// not only at the end: one and two samples per step, a linear and a
+    /// real-exponent model (the predicted-powers loop), a non-uniform time
+    /// grid and Coulomb friction each stop before the end of a record of
+    /// 200,000 samples; with no flag the same runs give the same samples
+    /// as `simulate` (the poll changes no number).
+    #[test]
+    fn every_rk4_path_stops_at_a_poll() {
+        use crate::simulation::simulate_cancellable;
+        use std::sync::atomic::AtomicBool;
+        static STOP: AtomicBool = AtomicBool::new(true);
+        let n = 200_000;
+        let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.01).sin()).collect();
+        let times: Vec<f64> = (0..n)
+            .map(|k| k as f64 / 4000.0 + 1e-9 * (k % 3) as f64)
+            .collect();
+        let linear = Model::linear(1.0, 3947.84, 12.566)
+            .unwrap()
+            .normalised()
+            .unwrap();
+        let mut real = linear;
+        (real.beta, real.rho, real.kappa, real.eta) = (1e5, 2.5, 0.5, 1.5);
+        let mut friction = linear;
+        (friction.kappa, friction.eta) = (0.05, -1.0);
+        let uniform = SampledInput::uniform(&u, 4000.0, 0.0).unwrap();
+        let uneven = SampledInput::with_times(&times, &u).unwrap();
+        for (name, model, input, spp) in [
+            ("linear, 1 sample/step", linear, &uniform, 1),
+            ("linear, 2 samples/step", linear, &uniform, 2),
+            ("real exponents, 2 samples/step", real, &uniform, 2),
+            ("non-uniform grid", linear, &uneven, 1),
+            ("Coulomb friction", friction, &uniform, 1),
+        ] {
+            let opts = Options {
+                method: Method::Rk4 {
+                    samples_per_step: spp,
+                },
+                ..Options::default()
+            };
+            let mut seen = 0usize;
+            let e = simulate_cancellable(&model, input, &opts, Cancel::new(&STOP), |_| seen += 1)
+                .unwrap_err();
+            assert!(matches!(e, SimulationError::Interrupted(_)), "{name}: {e}");
+            assert!(
+                seen <= (1 << 16) + 1,
+                "{name}: {seen} samples before the poll"
+            );
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            simulate(&model, input, &opts, |s| a.push((s.x, s.v))).unwrap();
+            simulate_cancellable(&model, input, &opts, Cancel::NEVER, |s| b.push((s.x, s.v)))
+                .unwrap();
+            assert_eq!(a.len(), n, "{name}");
+            assert!(a == b, "{name}");
         }
     }
 

@@ -49,6 +49,18 @@ struct SampledRun<'i, 'a, F> {
 /// record (an atomic load; the results do not depend on it).
 const CANCEL_EVERY: usize = 1 << 16;
 
+/// A uniformly sampled record as the loops read it: the values, their gain,
+/// the first sample time (s), the sampling rate (Hz), and the cancel flag
+/// the run polls.
+#[derive(Clone, Copy)]
+struct Uniform<'v> {
+    vals: &'v [f64],
+    g: f64,
+    t0: f64,
+    fs: f64,
+    cancel: Cancel,
+}
+
 impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
     type Out = Result<Summary, SimulationError>;
     fn go<S: Law, D: Law>(self, d: Dyn<S, D>) -> Self::Out {
@@ -59,6 +71,13 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
             cancel,
             mut sink,
         } = self;
+        let uniform = |t0, fs| Uniform {
+            vals: input.raw(),
+            g: input.gain(),
+            t0,
+            fs,
+            cancel,
+        };
         match (input.grid(), stride) {
             (Grid::Uniform { t0, fs }, 2) if S::SPECULATE || D::SPECULATE => {
                 #[cfg(target_arch = "x86_64")]
@@ -67,49 +86,13 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
                 {
                     // SAFETY: the CPU supports the features the function is compiled for.
                     return unsafe {
-                        uniform2_predicted_fma(
-                            &d,
-                            input.raw(),
-                            input.gain(),
-                            t0,
-                            fs,
-                            &opts,
-                            cancel,
-                            &mut sink,
-                        )
+                        uniform2_predicted_fma(&d, uniform(t0, fs), &opts, &mut sink)
                     };
                 }
-                uniform2_predicted::<S, D, F, NoFma>(
-                    &d,
-                    input.raw(),
-                    input.gain(),
-                    t0,
-                    fs,
-                    &opts,
-                    cancel,
-                    &mut sink,
-                )
+                uniform2_predicted::<S, D, F, NoFma>(&d, uniform(t0, fs), &opts, &mut sink)
             }
-            (Grid::Uniform { t0, fs }, 2) => uniform2(
-                &d,
-                input.raw(),
-                input.gain(),
-                t0,
-                fs,
-                &opts,
-                cancel,
-                &mut sink,
-            ),
-            (Grid::Uniform { t0, fs }, _) => uniform1(
-                &d,
-                input.raw(),
-                input.gain(),
-                t0,
-                fs,
-                &opts,
-                cancel,
-                &mut sink,
-            ),
+            (Grid::Uniform { t0, fs }, 2) => uniform2(&d, uniform(t0, fs), &opts, &mut sink),
+            (Grid::Uniform { t0, fs }, _) => uniform1(&d, uniform(t0, fs), &opts, &mut sink),
             (Grid::Times(_), 2) => Err(SimulationError::StrideNeedsUniformSampling {
                 samples_per_step: 2,
             }),
@@ -120,14 +103,17 @@ impl<F: FnMut(Sample)> Visit for SampledRun<'_, '_, F> {
 
 fn uniform1<S: Law, D: Law, F: FnMut(Sample)>(
     d: &Dyn<S, D>,
-    vals: &[f64],
-    g: f64,
-    t0: f64,
-    fs: f64,
+    rec: Uniform<'_>,
     opts: &Options,
-    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
+    let Uniform {
+        vals,
+        g,
+        t0,
+        fs,
+        cancel,
+    } = rec;
     let h = 1.0 / fs;
     let n = vals.len();
     let State { mut x, mut v } = opts.initial;
@@ -288,14 +274,17 @@ impl TwoSampleOutput {
 
 fn uniform2<S: Law, D: Law, F: FnMut(Sample)>(
     d: &Dyn<S, D>,
-    vals: &[f64],
-    g: f64,
-    t0: f64,
-    fs: f64,
+    rec: Uniform<'_>,
     opts: &Options,
-    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
+    let Uniform {
+        vals,
+        g,
+        t0,
+        fs,
+        cancel,
+    } = rec;
     let dt = 1.0 / fs;
     let h = 2.0 * dt;
     let h8 = 0.125 * h;
@@ -356,15 +345,11 @@ fn accel_near<S: Law, D: Law, M: MulAdd>(
 #[target_feature(enable = "avx2,fma")]
 unsafe fn uniform2_predicted_fma<S: Law, D: Law, F: FnMut(Sample)>(
     d: &Dyn<S, D>,
-    vals: &[f64],
-    g: f64,
-    t0: f64,
-    fs: f64,
+    rec: Uniform<'_>,
     opts: &Options,
-    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
-    uniform2_predicted::<S, D, F, super::law::HwFma>(d, vals, g, t0, fs, opts, cancel, sink)
+    uniform2_predicted::<S, D, F, super::law::HwFma>(d, rec, opts, sink)
 }
 
 /// [`uniform2`] for real exponents, with the powers taken off the critical
@@ -381,14 +366,17 @@ unsafe fn uniform2_predicted_fma<S: Law, D: Law, F: FnMut(Sample)>(
 #[inline(always)]
 fn uniform2_predicted<S: Law, D: Law, F: FnMut(Sample), M: MulAdd>(
     d: &Dyn<S, D>,
-    vals: &[f64],
-    g: f64,
-    t0: f64,
-    fs: f64,
+    rec: Uniform<'_>,
     opts: &Options,
-    cancel: Cancel,
     sink: &mut F,
 ) -> Result<Summary, SimulationError> {
+    let Uniform {
+        vals,
+        g,
+        t0,
+        fs,
+        cancel,
+    } = rec;
     let dt = 1.0 / fs;
     let h = 2.0 * dt;
     let h8 = 0.125 * h;
@@ -732,23 +720,27 @@ mod tests {
         let (mut a, mut b, mut c) = (vec![], vec![], vec![]);
         uniform2(
             &d,
-            u,
-            1.0,
-            0.0,
-            fs,
+            Uniform {
+                vals: u,
+                g: 1.0,
+                t0: 0.0,
+                fs,
+                cancel: Cancel::NEVER,
+            },
             &opts,
-            Cancel::NEVER,
             &mut |s: Sample| a.push((s.x, s.v)),
         )
         .unwrap();
         uniform2_predicted::<S, D, _, NoFma>(
             &d,
-            u,
-            1.0,
-            0.0,
-            fs,
+            Uniform {
+                vals: u,
+                g: 1.0,
+                t0: 0.0,
+                fs,
+                cancel: Cancel::NEVER,
+            },
             &opts,
-            Cancel::NEVER,
             &mut |s: Sample| b.push((s.x, s.v)),
         )
         .unwrap();
@@ -758,12 +750,14 @@ mod tests {
             unsafe {
                 uniform2_predicted_fma(
                     &d,
-                    u,
-                    1.0,
-                    0.0,
-                    fs,
+                    Uniform {
+                        vals: u,
+                        g: 1.0,
+                        t0: 0.0,
+                        fs,
+                        cancel: Cancel::NEVER,
+                    },
                     &opts,
-                    Cancel::NEVER,
                     &mut |s: Sample| c.push((s.x, s.v)),
                 )
             }

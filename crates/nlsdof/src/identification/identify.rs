@@ -926,6 +926,24 @@ pub fn identify(
     plan: &FitPlan,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<Identification, IdentifyError> {
+    match stages(data, plan, progress) {
+        // a run cancelled inside a stage can surface as that stage's own
+        // failure (a race whose every candidate was interrupted read "no
+        // candidate of the landscape could be refined: interrupted"): the
+        // flag decides, so a cancelled run always ends with `Interrupted`
+        Err(e) if plan.lm.cancel.is_cancelled() && !matches!(e, IdentifyError::Interrupted(_)) => {
+            Err(crate::cancel::Interrupted.into())
+        }
+        r => r,
+    }
+}
+
+/// The stages of [`identify`], in order.
+fn stages(
+    data: &Dataset,
+    plan: &FitPlan,
+    progress: &(dyn Fn(IdentifyProgress) + Sync),
+) -> Result<Identification, IdentifyError> {
     validate(plan)?;
     let setup = prepare(data, plan)?;
     let ex = explore(&setup, progress)?;

@@ -82,14 +82,13 @@ pub fn wald(res: &FitResult, j: usize) -> Option<Interval> {
 /// the Wald interval.
 pub fn chosen(res: &FitResult, profiles: &[OutputErrorProfile]) -> [Option<Interval>; N_PARAMS] {
     std::array::from_fn(|j| {
-        if res.status[j] == Status::Absent {
-            return None;
-        }
         // (a model that does not fit its noise has no valid interval of
         // any method: each assumes residuals that are noise)
+        if res.status[j] == Status::Absent || res.misfit.is_some() {
+            return None;
+        }
         profiles
             .iter()
-            .filter(|_| res.misfit.is_none())
             .find(|p| p.parameter as usize == j && p.refusal().is_none())
             .map(|p| Interval {
                 lower: p.lower,

@@ -657,19 +657,23 @@ impl Adequacy {
     /// quotes [`Self::needs_early_jumps`] instead.)
     pub fn quoted_ratio(&self, curves: &[CurveReport]) -> f64 {
         if !self.failing.is_empty() {
-            return self
-                .failing
+            self.failing
                 .iter()
                 .filter_map(|&i| curves.get(i))
                 .map(|c| c.noise.ratio())
-                .fold(0.0f64, f64::max);
-        }
-        let peaks_fail = !(self.peak_ratio.powi(2) <= ADEQUACY_PEAKS);
-        if peaks_fail && self.ratio.powi(2) <= ADEQUACY_ALL {
+                .fold(0.0f64, f64::max)
+        } else if self.only_peaks_fail() {
             self.peak_ratio
         } else {
             self.ratio
         }
+    }
+
+    /// No curve and not the whole set fails, only the resonance peaks.
+    fn only_peaks_fail(&self) -> bool {
+        self.failing.is_empty()
+            && !(self.peak_ratio.powi(2) <= ADEQUACY_PEAKS)
+            && self.ratio.powi(2) <= ADEQUACY_ALL
     }
 }
 
@@ -778,11 +782,9 @@ impl Identification {
         if self.adequacy.adequate {
             return None;
         }
-        let mut worst = 0.0f64;
         let mut names: Vec<String> = Vec::new();
         for &i in &self.adequacy.failing {
             let c = &self.curves[i];
-            worst = worst.max(c.noise.ratio());
             let dir = c.direction.name();
             let both = self.curves.iter().filter(|o| o.level == c.level).count() > 1;
             let name = if both {
@@ -817,28 +819,23 @@ impl Identification {
                 if early.len() > 1 { "their" } else { "its" },
             ));
         }
-        let peaks_fail = !(self.adequacy.peak_ratio.powi(2) <= ADEQUACY_PEAKS);
-        Some(
-            if names.is_empty() && peaks_fail && self.adequacy.ratio.powi(2) <= ADEQUACY_ALL {
-                format!(
-                "WARNING: the model does not fit the resonance peaks: residual {:.1}x the noise there \
+        // the number quoted is `FitResult::misfit`
+        let r = self.adequacy.quoted_ratio(&self.curves);
+        Some(if self.adequacy.only_peaks_fail() {
+            format!(
+                "WARNING: the model does not fit the resonance peaks: residual {r:.1}x the noise there \
                  ({:.1}x over all points){tried}",
-                self.adequacy.peak_ratio, self.adequacy.ratio
+                self.adequacy.ratio
             )
-            } else if names.is_empty() {
-                format!(
-                    "WARNING: the model does not fit the data: residual {:.1}x the noise{tried}",
-                    self.adequacy.ratio
-                )
-            } else {
-                format!(
-                    "WARNING: the model does not fit level{} {}: residual {:.1}x the noise{tried}",
-                    if names.len() > 1 { "s" } else { "" },
-                    names.join(", "),
-                    worst
-                )
-            },
-        )
+        } else if names.is_empty() {
+            format!("WARNING: the model does not fit the data: residual {r:.1}x the noise{tried}")
+        } else {
+            format!(
+                "WARNING: the model does not fit level{} {}: residual {r:.1}x the noise{tried}",
+                if names.len() > 1 { "s" } else { "" },
+                names.join(", "),
+            )
+        })
     }
 }
 

@@ -717,51 +717,22 @@ mod tests {
 
     fn run_both<S: Law, D: Law>(d: Dyn<S, D>, u: &[f64], fs: f64) {
         let opts = Options::default();
+        let rec = Uniform {
+            vals: u,
+            g: 1.0,
+            t0: 0.0,
+            fs,
+            cancel: Cancel::NEVER,
+        };
         let (mut a, mut b, mut c) = (vec![], vec![], vec![]);
-        uniform2(
-            &d,
-            Uniform {
-                vals: u,
-                g: 1.0,
-                t0: 0.0,
-                fs,
-                cancel: Cancel::NEVER,
-            },
-            &opts,
-            &mut |s: Sample| a.push((s.x, s.v)),
-        )
-        .unwrap();
-        uniform2_predicted::<S, D, _, NoFma>(
-            &d,
-            Uniform {
-                vals: u,
-                g: 1.0,
-                t0: 0.0,
-                fs,
-                cancel: Cancel::NEVER,
-            },
-            &opts,
-            &mut |s: Sample| b.push((s.x, s.v)),
-        )
-        .unwrap();
+        uniform2(&d, rec, &opts, &mut |s: Sample| a.push((s.x, s.v))).unwrap();
+        uniform2_predicted::<S, D, _, NoFma>(&d, rec, &opts, &mut |s: Sample| b.push((s.x, s.v)))
+            .unwrap();
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("fma") && std::arch::is_x86_feature_detected!("avx2")
         {
-            unsafe {
-                uniform2_predicted_fma(
-                    &d,
-                    Uniform {
-                        vals: u,
-                        g: 1.0,
-                        t0: 0.0,
-                        fs,
-                        cancel: Cancel::NEVER,
-                    },
-                    &opts,
-                    &mut |s: Sample| c.push((s.x, s.v)),
-                )
-            }
-            .unwrap();
+            unsafe { uniform2_predicted_fma(&d, rec, &opts, &mut |s: Sample| c.push((s.x, s.v))) }
+                .unwrap();
         }
         let sx = a.iter().fold(0.0f64, |m, p| m.max(p.0.abs()));
         let sv = a.iter().fold(0.0f64, |m, p| m.max(p.1.abs()));

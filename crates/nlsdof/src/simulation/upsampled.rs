@@ -273,13 +273,15 @@ mod record_tests {
     /// not only at the end: one and two samples per step, a linear and a
     /// real-exponent model (the predicted-powers loop), a non-uniform time
     /// grid and Coulomb friction each stop before the end of a record of
-    /// 200,000 samples; with no flag the same runs give the same samples
-    /// as `simulate` (the poll changes no number).
+    /// 200,000 samples; with a flag that is polled but never set, the same
+    /// runs give the samples of a run that never polls (`Cancel::NEVER`):
+    /// the poll changes no number.
     #[test]
     fn every_rk4_path_stops_at_a_poll() {
         use crate::simulation::simulate_cancellable;
         use std::sync::atomic::AtomicBool;
         static STOP: AtomicBool = AtomicBool::new(true);
+        static NEVER_SET: AtomicBool = AtomicBool::new(false);
         let n = 200_000;
         let u: Vec<f64> = (0..n).map(|k| (k as f64 * 0.01).sin()).collect();
         let times: Vec<f64> = (0..n)
@@ -318,8 +320,10 @@ mod record_tests {
             );
             let (mut a, mut b) = (Vec::new(), Vec::new());
             simulate(&model, input, &opts, |s| a.push((s.x, s.v))).unwrap();
-            simulate_cancellable(&model, input, &opts, Cancel::NEVER, |s| b.push((s.x, s.v)))
-                .unwrap();
+            simulate_cancellable(&model, input, &opts, Cancel::new(&NEVER_SET), |s| {
+                b.push((s.x, s.v))
+            })
+            .unwrap();
             assert_eq!(a.len(), n, "{name}");
             assert!(a == b, "{name}");
         }

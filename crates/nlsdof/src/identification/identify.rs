@@ -33,8 +33,11 @@
 //!    in θ, jump penalties in the exact reading) for at most
 //!    [`RACE_ITERATIONS`] LM iterations; the sign is the equation error's
 //!    ([`SignChoice::Auto`]), or both are fitted ([`SignChoice::Both`]).
-//!    The candidates the limit stopped near the lead continue; the lowest
-//!    objective wins.
+//!    The candidates the limit stopped near the lead continue; those far
+//!    above it (a race on every point only) have folds on the wrong side of
+//!    a measured step moved into it (`relocate_folds`: the least-misfit
+//!    change, else the least change in the optimisation variables) and
+//!    refitted; the lowest objective wins.
 //! 5. **Decisions, on the race's data** (`finish`): the terms
 //!    (`settle_terms`, below), the gain (`decide_gain`), the terms again
 //!    (a refitted gain can leave a term near a copy of the linear one).

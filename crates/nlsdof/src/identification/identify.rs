@@ -79,7 +79,9 @@
 //!    noise is estimated from the fit's residuals ([`super::noise`]); where
 //!    the residual is well above it ([`ADEQUACY_CURVE`], [`ADEQUACY_ALL`],
 //!    [`ADEQUACY_PEAKS`] over the resonance peaks, set from the in-family
-//!    suites), the escalation tries more candidates (every landscape
+//!    suites), or whatever the residual when the data have a single forcing
+//!    level (which pins the exponents weakly), the escalation tries more
+//!    candidates (every landscape
 //!    minimum, both signs), other jump assignments (folds moved past the
 //!    points still on their branch), then a multistart of
 //!    [`ESCALATION_STARTS`]; a lower objective goes through stages 5–7

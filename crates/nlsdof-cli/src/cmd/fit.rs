@@ -319,8 +319,9 @@ fn fit_long_help() -> String {
 (output error, at most 30 iterations each; those stopped near the lead continue) -> the gain and \
 the terms that do not matter decided by the objective's noise-scaled drop -> the winner refined on \
 all points (data of at most 50,000 points; a 1500-point subsample before) -> SELF-CHECK: each \
-curve's residual against its noise, estimated from the data; a fit well above it escalates (more \
-candidates, both signs, folds moved, a multistart of 16) and, if it still does not fit, says so on \
+curve's residual against its noise, estimated from the data; a fit well above it, or any fit of a \
+single forcing level, escalates (more candidates, both signs, folds moved, a multistart of 16) and, \
+if it still does not fit, says so on \
 the first line (\"the model does not fit levels ...: residual N x the noise\") and in JSON under \
 \"adequacy\". Details: docs/identification.md.\n\n\
 OBJECTIVE: each measured point against the model state the measured sweep was on (the state the \

@@ -1,5 +1,7 @@
 //! `nlsdof fit` / `nlsdof compare` end to end on a synthetic data set.
 
+mod common;
+
 use assert_cmd::Command;
 use nlsdof::{ForcedResponse, Formulation, NormalisedModel, SweepDirection};
 use std::fmt::Write as _;
@@ -266,12 +268,9 @@ fn compare_tabulates_models() {
 /// asserts the 2.5 % this fit meets (before the jump residuals: 9.05 %).
 #[test]
 fn clamped_beam_duffing_fit_predicts_jumps() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/clamped-beam-duffing-catarinaluz/cc_beam_no_magnet_24C");
-    if !dir.is_dir() {
-        eprintln!("SKIPPED: beam data directory {} is absent", dir.display());
+    let Some(dir) = common::beam_dir("cc_beam_no_magnet_24C") else {
         return;
-    }
+    };
     use nlsdof::identification::*;
     let full =
         nlsdof_io::stepped_sine_data::read_beam_dir(&dir, nlsdof_io::stepped_sine_data::Runs::Up)
@@ -560,30 +559,15 @@ fn a_misfit_has_no_valid_intervals() {
 /// move is now not taken.
 #[test]
 fn default_fits_of_the_beam_sets_complete_and_say_they_do_not_fit() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/clamped-beam-duffing-catarinaluz");
-    if !root.is_dir() {
-        eprintln!("SKIPPED: beam data directory {} is absent", root.display());
-        return;
-    }
     for set in [
         "cc_beam_no_magnet_24C",
         "cc_beam_magnet_24C",
         "cantilever_no_magnet",
     ] {
-        let o = Command::cargo_bin("nlsdof")
-            .unwrap()
-            .args(["fit", "--beam-dir"])
-            .arg(root.join(set))
-            .arg("--json")
-            .output()
-            .unwrap();
-        assert!(
-            o.status.success(),
-            "{set}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let Some(dir) = common::beam_dir(set) else {
+            return;
+        };
+        let v = common::json(&["fit", "--beam-dir", dir.to_str().unwrap(), "--json"]);
         assert_eq!(v["adequacy"]["adequate"], false, "{set}: {}", v["adequacy"]);
         let r = v["misfit"].as_f64().expect("misfit is a number");
         assert!(r > 10.0, "{set}: misfit {r}");

@@ -5,20 +5,7 @@
 
 mod common;
 
-use common::{example, fails, json, ok, write};
-use std::path::PathBuf;
-
-fn beam_dir(set: &str) -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/clamped-beam-duffing-catarinaluz")
-        .join(set);
-    if d.is_dir() {
-        Some(d)
-    } else {
-        eprintln!("SKIPPED: beam data directory {} is absent", d.display());
-        None
-    }
-}
+use common::{beam_dir, example, fails, json, ok, write};
 
 /// The clamped-clamped beam without magnet: hardening (the README's
 /// "strong Duffing hardening"; every up-run jumps down), the first line is

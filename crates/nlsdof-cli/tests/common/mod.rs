@@ -19,6 +19,21 @@ pub fn example(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// A beam set of `../shared/data/clamped-beam-duffing-catarinaluz` beside
+/// the repository; `None` (and a SKIPPED line) when the shared data are
+/// absent.
+pub fn beam_dir(set: &str) -> Option<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/clamped-beam-duffing-catarinaluz")
+        .join(set);
+    if d.is_dir() {
+        Some(d)
+    } else {
+        eprintln!("SKIPPED: beam data directory {} is absent", d.display());
+        None
+    }
+}
+
 /// Writes `text` to `dir/name` and returns the path.
 pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);

@@ -165,6 +165,12 @@ pub fn adequacy_json(id: &Identification) -> Value {
         "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL, "peaks_mean_z2": ADEQUACY_PEAKS,
                        "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2; residual_over_noise and peak_residual_over_noise are sqrt(mean z^2)"},
         "escalation": a.escalation,
+        "late_folds": a.late_folds.iter().map(|&(i, r)| {
+            let c = &id.curves[i];
+            json!({"level": c.level, "sweep": c.direction.name(),
+                   "left_early_by_hz": c.left_early_by.map(hz),
+                   "model_sweep_residual_over_noise": r})
+        }).collect::<Vec<_>>(),
         "needs_early_jumps": a.needs_early_jumps.map(|r| json!({
             "note": "the fit fits the noise only with the jumps of these curves read as censored (the sweep left its branch before the model's fold); read exactly it does not",
             "exact_residual_over_noise": r,

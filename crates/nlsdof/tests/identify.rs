@@ -13,6 +13,7 @@ use nlsdof::identification::equation_error::{
 use nlsdof::identification::landscape::{landscape, Axis, LandscapePhase};
 use nlsdof::identification::models::*;
 use nlsdof::identification::objective::{evaluate_with_phase, FitSpec};
+use nlsdof::identification::output_error::JumpReading;
 use nlsdof::identification::*;
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
@@ -648,6 +649,73 @@ fn a_single_level_is_searched_as_widely_as_a_misfit() {
     ]);
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert!(!id.adequacy.escalation.is_empty(), "{:?}", id.adequacy);
+}
+
+/// Blind set h013-mixed (`../shared/tools/blind_suite.py`, seed
+/// 110808810: four levels swept up and down, 200 steps, no phase, ρ = 4.70,
+/// η = 1.24) and its truth (mass-normalised).
+fn blind_h013() -> (Dataset, Parameters) {
+    let data = blind_set(include_str!("data/blind_h013_mixed.csv"));
+    let m = 97.39835864801628;
+    let truth = Parameters::from([
+        3938760.6748232045 / m,
+        61.01291873096872 / m,
+        1.712547736914544e17 / m,
+        4.704604063014635,
+        41.418214912737916 / m,
+        1.2426352980194202,
+        1.0,
+    ]);
+    (data, truth)
+}
+
+/// Blind h013-mixed without the escalation: the race's fit (η = 2.87,
+/// residual 1.16x the noise over all points) has level 3's up-sweep leave
+/// the model's branch a step before the model's fold; the measured-branch
+/// output error charges the point between them a small penalty, but the
+/// model's own sweep (Eq 31) is still on the upper branch there, at 92x the
+/// truth's Eq 31 cost. Read exactly that is not a solution: the self-check
+/// names the curve (`late_folds`) and the fit is not adequate.
+#[test]
+fn a_sweep_that_leaves_before_the_model_fold_read_exactly_is_flagged() {
+    let (data, truth) = blind_h013();
+    let mut plan = FitPlan::new(ModelKind::Generalised);
+    plan.escalate = false;
+    let id = identify(&data, &plan, &|_| {}).unwrap();
+    let eq31 = |th: &Parameters| objective::evaluate(&data, th, false).unwrap().cost();
+    // the miss this flag is for (else the test tests nothing)
+    assert!(eq31(&id.fit.theta) > 10.0 * eq31(&truth));
+    assert!(!id.adequacy.adequate, "{:?}", id.adequacy);
+    assert!(!id.adequacy.late_folds.is_empty());
+    for &(ci, ratio) in &id.adequacy.late_folds {
+        let c = &id.curves[ci];
+        assert_eq!(c.reading, JumpReading::Exact);
+        assert!(c.left_early_by.is_some());
+        // the model's own sweep is far from the data there
+        assert!(ratio > 10.0, "{ratio}");
+    }
+    let msg = id.adequacy_message().unwrap();
+    assert!(msg.contains("own sweep does not follow"), "{msg}");
+    assert_eq!(id.fit.misfit, Some(id.adequacy.quoted_ratio(&id.curves)));
+}
+
+/// Blind h013-mixed, default fit: the late fold escalates, and the
+/// escalation's exponent profile (η held across its range, the other
+/// parameters refitted, the best freed) finds the truth's basin, which no
+/// landscape candidate (η −0.78, −1) and no random start reached.
+#[test]
+fn an_exponent_profile_finds_the_basin_no_candidate_reached() {
+    let (data, truth) = blind_h013();
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert!(id.adequacy.adequate, "{:?}", id.adequacy);
+    assert!(
+        id.adequacy
+            .escalation
+            .iter()
+            .any(|t| t.contains("exponent held")),
+        "{:?}",
+        id.adequacy.escalation
+    );
 }
 
 /// A fitted model, as its file holds it (θ at unit mass, the gain as the

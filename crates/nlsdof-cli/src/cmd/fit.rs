@@ -320,10 +320,11 @@ fn fit_long_help() -> String {
 the terms that do not matter decided by the objective's noise-scaled drop -> the winner refined on \
 all points (data of at most 50,000 points; a 1500-point subsample before) -> SELF-CHECK: each \
 curve's residual against its noise, estimated from the data; a fit well above it, or any fit of a \
-single forcing level, escalates (more candidates, both signs, folds moved, a multistart of 16) and, \
-if it still does not fit, says so on \
+single forcing level, escalates (more candidates, both signs, folds moved, a multistart of 16, each \
+exponent held across its range) and, if it still does not fit, says so on \
 the first line (\"the model does not fit levels ...: residual N x the noise\") and in JSON under \
-\"adequacy\". Details: docs/identification.md.\n\n\
+\"adequacy\". A fit whose measured sweep leaves the model's branch a step or more before the model's \
+fold (read exactly) does not fit either: the model's own sweep does not follow the data there. Details: docs/identification.md.\n\n\
 OBJECTIVE: each measured point against the model state the measured sweep was on (the state the \
 model's own sweep follows; before the model's fold another stable state; after it the fold's end), \
 continuous in the parameters, plus the jump penalties below. The reported `cost` is the paper's \

@@ -241,12 +241,21 @@ impl FitResult {
     }
 
     /// Results worth a line that are not warnings: parameters at natural
-    /// bounds ("eta = -1 (Coulomb friction)") and vanished terms.
+    /// bounds ("eta = -1 (Coulomb friction)"), vanished terms, and free
+    /// exponents the data do not determine (95 % interval reaching −3,
+    /// [`flags::undetermined_exponents`]).
     pub fn notes(&self) -> Vec<String> {
         self.natural
             .iter()
             .map(|n| n.describe())
             .chain(self.inactive.iter().map(|i| i.describe()))
+            .chain(
+                self.uncertainty
+                    .as_ref()
+                    .map_or(Vec::new(), flags::undetermined_exponents)
+                    .iter()
+                    .map(|u| u.describe()),
+            )
             .collect()
     }
 

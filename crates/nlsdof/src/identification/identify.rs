@@ -2854,10 +2854,9 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
     let Ok((e, matches)) = comparison(data, f) else {
         return failed();
     };
-    // the model's own sweep (Eq 31), for the curves that left early
-    let Ok(sweep) = super::objective::evaluate(data, &f.fit.theta, false) else {
-        return failed();
-    };
+    // the model's own sweep (Eq 31), evaluated when a curve read exactly
+    // left early (NaN residuals if it cannot be)
+    let mut sweep: Option<Vec<f64>> = None;
     let mut late_folds = Vec::new();
     let wp = f.spec.phase_weight.is_some();
     let nm = noise_model(data, &e.residuals, wp).with_precision_floor(data);
@@ -2911,12 +2910,16 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
         };
         let left_early_by = early_by(c, m);
         if reading == JumpReading::Exact && left_early_by.is_some() {
+            let sweep = sweep.get_or_insert_with(|| {
+                super::objective::evaluate(data, &f.fit.theta, false)
+                    .map_or_else(|_| vec![f64::NAN; data.len()], |e| e.residuals)
+            });
             let mut z2 = 0.0;
             let mut count = 0usize;
             for i in 0..n {
                 let sg = nm.amplitude[ci][i];
                 if sg > 0.0 && sg.is_finite() {
-                    z2 += (sweep.residuals[off + i] / sg).powi(2);
+                    z2 += (sweep[off + i] / sg).powi(2);
                     count += 1;
                 }
             }

@@ -718,6 +718,45 @@ fn an_exponent_profile_finds_the_basin_no_candidate_reached() {
     );
 }
 
+/// A blind in-family set (`../shared/tools/blind_suite.py`, seed
+/// 2711270013, case h037-friction: two levels swept up, 300 steps, no
+/// phase, ρ = 2.86, Coulomb friction η = −1). The fit reached 0.89× the
+/// truth's Eq 31 cost with η at its natural bound −1, then crawled along ρ
+/// and β for twelve rounds of 25 iterations and ended "did not converge
+/// (max-iterations)": a false alarm. Holding the parameter at its natural
+/// bound while the rest converges (`hold_natural_bounds`) ends it
+/// converged, at a lower cost, and still reported as Coulomb friction.
+#[test]
+fn a_crawl_beside_a_natural_bound_converges_with_the_bound_held() {
+    let data = blind_set(include_str!("data/blind_h037_friction.csv"));
+    let m = 16.020598116319658;
+    let truth = Parameters::from([
+        936602.8233285932 / m,
+        14.95301896593451 / m,
+        719278983068.4012 / m,
+        2.8619136641205873,
+        2.8807696121868873 / m,
+        -1.0,
+        1.0,
+    ]);
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert!(
+        id.fit.converged && id.adequacy.adequate,
+        "{:?} {:?}",
+        id.fit.termination,
+        id.adequacy
+    );
+    assert!(
+        id.fit
+            .natural
+            .iter()
+            .any(|n| n.name == "eta" && n.value == -1.0),
+        "{:?}",
+        id.fit.natural
+    );
+    assert_eq!(id.fit.status[ETA], Status::Free);
+}
+
 /// A fitted model, as its file holds it (θ at unit mass, the gain as the
 /// input gain), swept at the data's levels, frequencies and directions,
 /// gives the fit's model curves bit for bit (issue 25: a model file

@@ -497,6 +497,16 @@ fn default_fit_finds_the_optimum(data: &Dataset, truth: &Parameters) -> Identifi
     id
 }
 
+/// The fit says nothing alarming: converged, and adequate to its noise.
+fn assert_trusted(id: &Identification) {
+    assert!(
+        id.fit.converged && id.adequacy.adequate,
+        "{:?} {:?}",
+        id.fit.termination,
+        id.adequacy
+    );
+}
+
 /// Blind set g3 h016-mixed and its truth (mass-normalised).
 fn blind_h016() -> (Dataset, Parameters) {
     let data = blind_set(include_str!("data/blind_h016_mixed.csv"));
@@ -526,11 +536,7 @@ fn blind_h016() -> (Dataset, Parameters) {
 fn a_late_fold_is_pulled_into_its_measured_jump() {
     let (data, truth) = blind_h032();
     let id = default_fit_finds_the_optimum(&data, &truth);
-    assert!(
-        id.adequacy.adequate && id.fit.converged,
-        "{:?}",
-        id.adequacy
-    );
+    assert_trusted(&id);
 }
 
 /// Blind set h032-mixed (seed 783382638) and its truth (mass-normalised).
@@ -619,12 +625,7 @@ fn a_crawl_on_small_data_is_given_rounds_to_converge() {
         1.0,
     ]);
     let id = default_fit_finds_the_optimum(&data, &truth);
-    assert!(
-        id.fit.converged && id.adequacy.adequate,
-        "{:?} {:?}",
-        id.fit.termination,
-        id.adequacy
-    );
+    assert_trusted(&id);
 }
 
 /// A blind in-family set (`../shared/tools/blind_suite.py`, seed
@@ -740,12 +741,7 @@ fn a_crawl_beside_a_natural_bound_converges_with_the_bound_held() {
         1.0,
     ]);
     let id = default_fit_finds_the_optimum(&data, &truth);
-    assert!(
-        id.fit.converged && id.adequacy.adequate,
-        "{:?} {:?}",
-        id.fit.termination,
-        id.adequacy
-    );
+    assert_trusted(&id);
     assert!(
         id.fit
             .natural

@@ -946,6 +946,28 @@ impl Fitted {
         }
     }
 
+    /// `spec` at θ assessed on `data` (objective, Jacobian, flags) as the
+    /// end of the fit `of` (its termination, iterations and minima); the
+    /// objective is the assessed one.
+    fn assessed(
+        data: &Dataset,
+        spec: FitSpec,
+        theta: super::Parameters,
+        of: &FitResult,
+    ) -> Result<Self, FitError> {
+        let r = super::assess(
+            data,
+            &spec,
+            theta,
+            of.termination,
+            of.iterations,
+            of.minima.clone(),
+        )?;
+        let mut out = Self::from_result(r, spec);
+        out.objective = out.fit.objective + out.fit.phase_cost.unwrap_or(0.0);
+        Ok(out)
+    }
+
     /// `spec` fitted on `data` with `opts` (no progress reports); `None`
     /// when the fit fails.
     fn fitted(data: &Dataset, spec: FitSpec, opts: &FitOptions) -> Option<Self> {
@@ -1963,16 +1985,7 @@ fn refine_all_points(
     // the subsample's optimum judged on every point, and refined there;
     // the lower objective is kept
     let f = &winner.fit;
-    let r = super::assess(
-        fit_data,
-        &spec_all,
-        f.theta,
-        f.termination,
-        f.iterations,
-        f.minima.clone(),
-    )?;
-    let mut out = Fitted::from_result(r, spec_all.clone());
-    out.objective = out.fit.objective + out.fit.phase_cost.unwrap_or(0.0);
+    let mut out = Fitted::assessed(fit_data, spec_all.clone(), f.theta, f)?;
     out.fit.inactive = winner.fit.inactive.clone();
     if let Some(polished) = Fitted::fitted(fit_data, spec_all, &single) {
         let mut polished = continue_unfinished(setup, polished, fit_data)?;
@@ -2002,8 +2015,6 @@ fn continue_unfinished(setup: &Setup, f: Fitted, data: &Dataset) -> Result<Fitte
     let plan = setup.plan;
     let mut single = limited(&plan.lm, plan.seed, POLISH_ITERATIONS);
     single.lm.ftol = single.lm.ftol.max(POLISH_FTOL);
-    let inactive = f.fit.inactive.clone();
-    let mut f = f;
     // (a plan whose iteration limit is below one round asked for an early
     // stop: it keeps the base rounds)
     let rounds = if plan.lm.max_iterations >= POLISH_ITERATIONS {
@@ -2011,24 +2022,34 @@ fn continue_unfinished(setup: &Setup, f: Fitted, data: &Dataset) -> Result<Fitte
     } else {
         POLISH_ROUNDS
     };
+    let mut f = more_rounds(f, data, &single, rounds);
+    if f.fit.termination == Termination::MaxIterations && !f.fit.natural.is_empty() {
+        f = hold_natural_bounds(f, data, &single, rounds)?;
+    }
+    Ok(f)
+}
+
+/// `f` refitted from where it stopped while its fit ends at its iteration
+/// limit, `f` counting as the first of at most `rounds` fits of `opts`; a
+/// round that fails or raises the objective ends it. The terms `f` had
+/// found inactive stay so.
+fn more_rounds(f: Fitted, data: &Dataset, opts: &FitOptions, rounds: usize) -> Fitted {
+    let inactive = f.fit.inactive.clone();
+    let mut f = f;
     for _ in 1..rounds {
         if f.fit.termination != Termination::MaxIterations {
             break;
         }
         let spec = restarted(&f.spec, &f.fit.theta);
-        let Some(next) = Fitted::fitted(data, spec, &single) else {
-            break;
-        };
-        if next.objective > f.objective {
-            break;
+        match Fitted::fitted(data, spec, opts) {
+            Some(next) if next.objective <= f.objective => {
+                f = next;
+                f.fit.inactive = inactive.clone();
+            }
+            _ => break,
         }
-        f = next;
-        f.fit.inactive = inactive.clone();
     }
-    if f.fit.termination == Termination::MaxIterations && !f.fit.natural.is_empty() {
-        f = hold_natural_bounds(f, data, &single, rounds)?;
-    }
-    Ok(f)
+    f
 }
 
 /// `f`, still moving at its iteration limit with parameters at natural
@@ -2055,33 +2076,15 @@ fn hold_natural_bounds(
         }
     }
     // (the same budget of rounds as the free continuation)
-    let Some(mut h) = Fitted::fitted(data, held, opts) else {
+    let Some(h) = Fitted::fitted(data, held, opts) else {
         return Ok(f);
     };
-    for _ in 1..rounds {
-        if h.fit.termination != Termination::MaxIterations {
-            break;
-        }
-        let spec = restarted(&h.spec, &h.fit.theta);
-        match Fitted::fitted(data, spec, opts) {
-            Some(next) if next.objective <= h.objective => h = next,
-            _ => break,
-        }
-    }
+    let h = more_rounds(h, data, opts, rounds);
     if h.objective > f.objective || h.fit.termination == Termination::MaxIterations {
         return Ok(f);
     }
     let spec = restarted(&f.spec, &h.fit.theta);
-    let r = super::assess(
-        data,
-        &spec,
-        h.fit.theta,
-        h.fit.termination,
-        h.fit.iterations,
-        h.fit.minima.clone(),
-    )?;
-    let mut out = Fitted::from_result(r, spec);
-    out.objective = out.fit.objective + out.fit.phase_cost.unwrap_or(0.0);
+    let mut out = Fitted::assessed(data, spec, h.fit.theta, &h.fit)?;
     out.fit.inactive = f.fit.inactive.clone();
     Ok(out)
 }
@@ -2659,17 +2662,7 @@ fn relocate_folds(
         return Ok(best);
     };
     let spec = restarted(&best.spec, &held.fit.theta);
-    let f = &held.fit;
-    let r = super::assess(
-        work,
-        &spec,
-        f.theta,
-        f.termination,
-        f.iterations,
-        f.minima.clone(),
-    )?;
-    let mut cand = Fitted::from_result(r, spec);
-    cand.objective = cand.fit.objective + cand.fit.phase_cost.unwrap_or(0.0);
+    let cand = Fitted::assessed(work, spec, held.fit.theta, &held.fit)?;
     // a refit its budget stopped continues without the barrier (the
     // fold's own barrier holds it), so it does not end "not converged"
     let mut cand = continue_unfinished(setup, cand, work)?;
@@ -2754,6 +2747,8 @@ const PULL_BARRIER: f64 = 1e4;
 /// frequency.
 fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, IdentifyError> {
     let mut best = best;
+    // the noise-scaled cost of `best` and its noise model, while it stands
+    let mut now: Option<(f64, NoiseModel)> = None;
     for _round in 0..3 {
         let (_, matches) = comparison(work, &best)?;
         let mut moved = false;
@@ -2780,37 +2775,31 @@ fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, Identify
                 continue;
             };
             let spec = restarted(&best.spec, &theta);
-            let f = &best.fit;
             // a moved θ that cannot be evaluated is not taken (measured on
             // the 24 °C beam, with a variant of the late-fold pull: a fold
             // moved by 1e-9 took η from −1 to −1 + 2e-9, where the friction
             // that held the mass at 120 Hz left an amplitude of 1e-300, the
             // solve overflowed, and the error ended the identification)
-            let Ok(r) = super::assess(
-                work,
-                &spec,
-                theta,
-                f.termination,
-                f.iterations,
-                f.minima.clone(),
-            ) else {
+            let Ok(mut moved_fit) = Fitted::assessed(work, spec, theta, &best.fit) else {
                 continue;
             };
-            let mut moved_fit = Fitted::from_result(r, spec);
-            moved_fit.objective = moved_fit.fit.objective + moved_fit.fit.phase_cost.unwrap_or(0.0);
             // accepted when it costs nothing measurable: less than a tenth
-            // of one point's noise variance
-            let (z_now, nm) = noise_scaled(work, &best, None)?;
-            let Ok((z_moved, _)) = noise_scaled(work, &moved_fit, Some(&nm)) else {
-                continue;
+            // of one point's noise variance (the current fit's cost and
+            // noise model are computed once per accepted fit)
+            let (z_now, nm) = match now.take() {
+                Some(v) => v,
+                None => noise_scaled(work, &best, None)?,
             };
-            if z_moved <= z_now + 0.1 {
+            let z_moved = noise_scaled(work, &moved_fit, Some(&nm)).ok().map(|v| v.0);
+            if z_moved.is_some_and(|z| z <= z_now + 0.1) {
                 moved_fit.fit.inactive = best.fit.inactive.clone();
                 moved_fit.fit.termination = best.fit.termination;
                 moved_fit.fit.converged = best.fit.converged;
                 moved_fit.objective = moved_fit.objective.max(0.0);
                 best = moved_fit;
                 moved = true;
+            } else {
+                now = Some((z_now, nm));
             }
         }
         if !moved {

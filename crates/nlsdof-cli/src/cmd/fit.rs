@@ -199,6 +199,8 @@ pub struct Args {
     #[arg(long, default_value = "generalised")]
     pub model: String,
     /// Hold parameters: name=value,.. (alpha, delta, beta, rho, kappa, eta, gain; m or mass sets the mass for conversion).
+    /// kappa=0 is the model without nonlinear damping (as --model generalised-stiffness; eta then means nothing).
+    /// rho=0 or eta=0 with its coefficient free is refused: x|x|^0 = x, so the term would copy the linear one.
     #[arg(long, value_name = "NAME=VALUE,..", allow_hyphen_values = true)]
     pub fix: Option<String>,
     /// Estimate parameters the model holds (e.g. gain, or an exponent): name,..

@@ -235,6 +235,29 @@ pub fn landscape_cancellable(
     if matches!(phase, LandscapePhase::Ignore) && rows.iter().flatten().all(degenerate) {
         rows = solve_rows(false, false);
         cancel.check()?;
+    } else if matches!(phase, LandscapePhase::Ignore) && ev.len() == 1 && nr > 1 {
+        // a single row (no nonlinear damping, or η held) is one chain from
+        // ρ = 0, where β is a copy of α: a chain that starts in a poor
+        // basin has no other row to escape by. Each node is also solved
+        // cold and the lower cost kept (measured: a blind three-level
+        // hardening set, ρ 5.43, fitted with a power-law stiffness only;
+        // the chained row's best node was ρ 0.25 at gain 5.23 and cost
+        // 914, above the cost 45.3 its node ρ 5.25 has with the gain held
+        // at 1, a point of the free-gain problem; the race from it stuck
+        // 69.9x the noise and freed the gain)
+        let cold = solve_rows(false, false);
+        cancel.check()?;
+        for (row, cold_row) in rows.iter_mut().zip(cold) {
+            for (f, c) in row.iter_mut().zip(cold_row) {
+                let cost = |f: &Result<EquationErrorFit, EquationErrorError>| match f {
+                    Ok(f) if f.unidentifiable.is_empty() => f.cost,
+                    _ => f64::INFINITY,
+                };
+                if cost(&c) < cost(f) {
+                    *f = c;
+                }
+            }
+        }
     }
     let mut cost = Vec::with_capacity(nr * ev.len());
     let mut fits = Vec::with_capacity(nr * ev.len());

@@ -192,6 +192,16 @@ pub enum SpecError {
     },
     #[error("no free parameter left to fit")]
     NothingFree,
+    /// An exponent held at 0 with its coefficient free: the term is then a
+    /// copy of the linear one (`x|x|^0 = x`, `x'|x'|^0 = x'`), and the
+    /// two coefficients cannot be separated by any data.
+    #[error("{exponent} held at 0 makes the {coefficient} term a copy of the linear {linear} term ({coefficient} and {linear} cannot be separated): free {exponent}, or {remedy}")]
+    CopiesLinear {
+        exponent: &'static str,
+        coefficient: &'static str,
+        linear: &'static str,
+        remedy: &'static str,
+    },
 }
 
 fn is_log(j: usize) -> bool {

@@ -780,6 +780,43 @@ fn a_power_law_stiffness_alone_finds_the_optimum_with_the_gain_held() {
     }
 }
 
+/// Blind h008-hardening (`../shared/tools/blind_suite.py`, seed 2711270031:
+/// four levels swept up and down, 200 steps, no phase, ρ = 3.80, no
+/// nonlinear damping). The fit converged within the noise at 1.071x the
+/// truth's Eq 31 cost with level 4's up-sweep fold pinned 1.3e-7 Hz above
+/// the last measured step on its branch (the truth's fold lies inside the
+/// step cell, β and ρ elsewhere along their ridge). The fold moved into
+/// its cell and refitted behind the barrier (`unpin_folds`) reaches the
+/// optimum, and the fit stays trusted.
+#[test]
+fn a_fold_pinned_at_a_measured_step_is_moved_into_its_cell() {
+    let data = blind_set(include_str!("data/blind_h008_hardening.csv"));
+    let m = 38.541409525194645;
+    let truth = Parameters::from([
+        149792.94065675922 / m,
+        52.055476853796534 / m,
+        1154730223455.5867 / m,
+        3.8042661431729616,
+        0.0,
+        0.0,
+        1.0,
+    ]);
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert_trusted(&id);
+    // the fold of level 4's up-sweep is inside its step cell, not at a step
+    let (ci, c) = id
+        .data
+        .curves
+        .iter()
+        .enumerate()
+        .find(|(_, c)| c.level == "4" && c.direction == SweepDirection::Up)
+        .unwrap();
+    let wf = id.curves[ci].model_jump.expect("a model jump");
+    let k = c.omegas.partition_point(|&w| w < wf);
+    let (lo, hi) = (c.omegas[k - 1], c.omegas[k]);
+    assert!((wf - lo).min(hi - wf) > 0.05 * (hi - lo), "{lo} {wf} {hi}");
+}
+
 /// An exponent held at 0 with its coefficient free makes the term a copy
 /// of the linear one: a typed error naming both, not a landscape whose
 /// every node is rank-deficient (which named the wrong pair for η).

@@ -1149,24 +1149,8 @@ fn stages(
     // (measured: a blind set, one level swept up and down, no phase, ρ 5.6,
     // η 1.7, whose race ended at η 0.04 and 2.11x the truth's Eq 31 cost
     // with a residual 1.23x the noise; the escalation reaches 0.97x).
-    // A fit within its noise whose fold is pinned at a measured step can
-    // still miss the optimum (`unpin_folds`; only such fits: a fit that
-    // does not fit is flagged whatever its folds, and on the 24 °C beam,
-    // 1268x the noise, the unpinned fit led the censored stage to a higher
-    // Eq 31 cost, 3.77e-4 against 3.37e-4)
-    unpin_within_noise(&setup, &fit_data, &mut best, &mut curves, &mut adequacy)?;
-    // A fold still pinned against a step after that is a constrained
-    // optimum: the fit wants it across the step. Such a fit is searched as
-    // widely as one that does not fit (measured: blind h002-mixed, seed
-    // 2711270052, four levels up, ρ 3.14, η 0.41: the fit at η 3.43, 1.215x
-    // the truth's Eq 31 cost, residual 1.16x the noise, had level 4's fold
-    // 2.8e-6 rad/s above its last step on the branch, and neither move of
-    // `unpin_folds` descended; escalated, 1.079x)
-    let pinned = adequacy.adequate
-        && fit_data.len() <= POLISH_MAX_POINTS
-        && !pinned_folds(&fit_data, &best)?.is_empty();
     let single_level = fit_data.levels().len() == 1;
-    if (!adequacy.adequate || single_level || pinned) && plan.escalate {
+    if (!adequacy.adequate || single_level) && plan.escalate {
         let (alt, tried, more) = escalate(
             &setup,
             &ex,
@@ -1203,9 +1187,27 @@ fn stages(
             }
         }
     }
-    // (the escalation's fit can be pinned too)
-    if !adequacy.escalation.is_empty() {
-        unpin_within_noise(&setup, &fit_data, &mut best, &mut curves, &mut adequacy)?;
+    // A fit within its noise whose fold is pinned at a measured step can
+    // still miss the optimum (`unpin_folds`); it is kept only if it stays
+    // within the noise. (Only such fits: a fit that does not fit is flagged
+    // whatever its folds, and on the 24 °C beam, 1268x the noise, the
+    // unpinned fit led the censored stage to a higher Eq 31 cost, 3.77e-4
+    // against 3.37e-4.)
+    // (data fitted on every point: a subsample's fit is judged, not refined,
+    // on all points)
+    if adequacy.adequate && fit_data.len() <= POLISH_MAX_POINTS {
+        let un = unpin_folds(&setup, best.clone(), &fit_data)?;
+        if un.fit.cost < best.fit.cost {
+            let un = keep_folds_off_steps(un, &fit_data)?;
+            let (un_curves, un_adequacy) = judge(&fit_data, &un);
+            if un_adequacy.adequate {
+                best = un;
+                curves = un_curves;
+                let tried = std::mem::take(&mut adequacy.escalation);
+                adequacy = un_adequacy;
+                adequacy.escalation = tried;
+            }
+        }
     }
     // Early jumps: only a fit that does not fit the noise with every jump
     // read exactly (after the escalation) is asked whether some sweeps left
@@ -2828,58 +2830,11 @@ const PINNED: f64 = 0.01;
 /// within the noise at 1.071x the truth's Eq 31 cost; moved into its cell
 /// and refitted, 0.995x).
 fn unpin_folds(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, IdentifyError> {
-    let pinned = pinned_folds(work, &best)?;
-    if pinned.is_empty() {
-        return Ok(best);
-    }
+    let (_, matches) = comparison(work, &best)?;
     let mut moved = best.clone();
     let mut any = false;
-    for &(ci, k) in &pinned {
-        any |= move_fold_between(work, &mut moved, ci, (k - 1, k), true)?
-            || move_fold_between(work, &mut moved, ci, (k - 1, k), false)?;
-    }
-    if !any {
-        return Ok(best);
-    }
-    refit_behind_barrier(setup, best, moved, work, POLISH_ITERATIONS)
-}
-
-/// `best`, when within its noise (`adequacy`) and fitted on every point,
-/// replaced by its [`unpin_folds`] result when that is lower and still
-/// within the noise (with its judgement; the escalation tried is kept).
-fn unpin_within_noise(
-    setup: &Setup,
-    fit_data: &Dataset,
-    best: &mut Fitted,
-    curves: &mut Vec<CurveReport>,
-    adequacy: &mut Adequacy,
-) -> Result<(), IdentifyError> {
-    if !adequacy.adequate || fit_data.len() > POLISH_MAX_POINTS {
-        return Ok(());
-    }
-    let un = unpin_folds(setup, best.clone(), fit_data)?;
-    if un.fit.cost >= best.fit.cost {
-        return Ok(());
-    }
-    let un = keep_folds_off_steps(un, fit_data)?;
-    let (un_curves, mut un_adequacy) = judge(fit_data, &un);
-    if un_adequacy.adequate {
-        *best = un;
-        *curves = un_curves;
-        un_adequacy.escalation = std::mem::take(&mut adequacy.escalation);
-        *adequacy = un_adequacy;
-    }
-    Ok(())
-}
-
-/// The curves read exactly whose fold is pinned against a measured step
-/// (within [`PINNED`] of its cell), each with the index of the cell's
-/// upper step.
-fn pinned_folds(work: &Dataset, f: &Fitted) -> Result<Vec<(usize, usize)>, IdentifyError> {
-    let (_, matches) = comparison(work, f)?;
-    let mut pinned = Vec::new();
     for (ci, c) in work.curves.iter().enumerate() {
-        if f.spec.censored.get(ci).copied().unwrap_or(false) {
+        if best.spec.censored.get(ci).copied().unwrap_or(false) {
             continue;
         }
         let Some((wf, _)) = matches[ci].fold else {
@@ -2890,11 +2845,16 @@ fn pinned_folds(work: &Dataset, f: &Fitted) -> Result<Vec<(usize, usize)>, Ident
             continue;
         }
         let (lo, hi) = (c.omegas[k - 1], c.omegas[k]);
-        if (wf - lo).min(hi - wf) <= PINNED * (hi - lo) {
-            pinned.push((ci, k));
+        if (wf - lo).min(hi - wf) > PINNED * (hi - lo) {
+            continue;
         }
+        any |= move_fold_between(work, &mut moved, ci, (k - 1, k), true)?
+            || move_fold_between(work, &mut moved, ci, (k - 1, k), false)?;
     }
-    Ok(pinned)
+    if !any {
+        return Ok(best);
+    }
+    refit_behind_barrier(setup, best, moved, work, POLISH_ITERATIONS)
 }
 
 /// `f`'s θ (and its start) moved so that the first fold of curve `ci` lies

@@ -2840,11 +2840,9 @@ fn unpin_folds(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, Id
         let Some((wf, _)) = matches[ci].fold else {
             continue;
         };
-        let k = c.omegas.partition_point(|&w| w < wf);
-        if k == 0 || k >= c.omegas.len() {
+        let Some((k, lo, hi)) = step_cell(c, wf) else {
             continue;
-        }
-        let (lo, hi) = (c.omegas[k - 1], c.omegas[k]);
+        };
         if (wf - lo).min(hi - wf) > PINNED * (hi - lo) {
             continue;
         }
@@ -2923,6 +2921,14 @@ fn least_misfit_direction(
 /// Multiplies the jump penalties while [`pull_late_folds`] refits.
 const PULL_BARRIER: f64 = 1e4;
 
+/// The measured step cell of curve `c` around frequency `wf` (rad/s):
+/// `(k, ω_{k−1}, ω_k)` with `ω_{k−1} < wf ≤ ω_k`; `None` outside the
+/// measured range.
+fn step_cell(c: &Curve, wf: f64) -> Option<(usize, f64, f64)> {
+    let k = c.omegas.partition_point(|&w| w < wf);
+    (k > 0 && k < c.omegas.len()).then(|| (k, c.omegas[k - 1], c.omegas[k]))
+}
+
 /// Stage 7: no fitted fold within [`FOLD_MARGIN`] of a step of a measured
 /// frequency.
 fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, IdentifyError> {
@@ -2937,11 +2943,9 @@ fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, Identify
                 continue;
             };
             // the measured step interval around the fold
-            let k = c.omegas.partition_point(|&w| w < wf);
-            if k == 0 || k >= c.omegas.len() {
+            let Some((_, lo, hi)) = step_cell(c, wf) else {
                 continue;
-            }
-            let (lo, hi) = (c.omegas[k - 1], c.omegas[k]);
+            };
             let margin = FOLD_MARGIN * wf;
             // aim at twice the margin, so that rounding cannot leave it short
             let target = if wf - lo < margin {

@@ -1177,13 +1177,9 @@ fn stages(
             )?;
             // both read exactly, on every point: the lower objective wins
             if alt.objective < best.objective {
-                let (alt_curves, alt_adequacy) = judge(&fit_data, &alt);
-                best = alt;
-                curves = alt_curves;
+                let judged = judge(&fit_data, &alt);
+                adopt((&mut best, &mut curves, &mut adequacy), alt, judged);
                 gain_test = alt_gain;
-                let tried = std::mem::take(&mut adequacy.escalation);
-                adequacy = alt_adequacy;
-                adequacy.escalation = tried;
             }
         }
     }
@@ -1199,13 +1195,9 @@ fn stages(
         let un = unpin_folds(&setup, best.clone(), &fit_data)?;
         if un.fit.cost < best.fit.cost {
             let un = keep_folds_off_steps(un, &fit_data)?;
-            let (un_curves, un_adequacy) = judge(&fit_data, &un);
-            if un_adequacy.adequate {
-                best = un;
-                curves = un_curves;
-                let tried = std::mem::take(&mut adequacy.escalation);
-                adequacy = un_adequacy;
-                adequacy.escalation = tried;
+            let judged = judge(&fit_data, &un);
+            if judged.1.adequate {
+                adopt((&mut best, &mut curves, &mut adequacy), un, judged);
             }
         }
     }
@@ -1244,11 +1236,11 @@ fn stages(
                     alt_adequacy.adequate = false;
                     alt_adequacy.needs_early_jumps = Some(exact_worst);
                 }
-                best = alt;
-                curves = alt_curves;
-                let tried = std::mem::take(&mut adequacy.escalation);
-                adequacy = alt_adequacy;
-                adequacy.escalation = tried;
+                adopt(
+                    (&mut best, &mut curves, &mut adequacy),
+                    alt,
+                    (alt_curves, alt_adequacy),
+                );
             }
         }
     }
@@ -1955,6 +1947,19 @@ fn finish(
     judged_on_all(best, fit_data, refine_data)
 }
 
+/// `alt`, with its judgement (`judge`), replaces the result `(best,
+/// curves, adequacy)`; the escalation tried so far stays listed.
+fn adopt(
+    (best, curves, adequacy): (&mut Fitted, &mut Vec<CurveReport>, &mut Adequacy),
+    alt: Fitted,
+    (alt_curves, mut alt_adequacy): (Vec<CurveReport>, Adequacy),
+) {
+    alt_adequacy.escalation = std::mem::take(&mut adequacy.escalation);
+    *best = alt;
+    *curves = alt_curves;
+    *adequacy = alt_adequacy;
+}
+
 /// `alt` (a fit with some curves read as censored) read exactly at its θ
 /// when that fits the noise, with its judgement: the censored reading was
 /// then only the search's way to the optimum, and no sweep needs an early
@@ -2550,8 +2555,8 @@ fn settle_terms(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, I
         // (a weak term the data see but cannot pin — a ridge with its own
         // exponent, a wide interval — is kept and reported as such)
         // an exponent at a bound of its range: the term may not be needed
-        let exponent_at_bound = hits.iter().any(|&(j, _)| j == exp)
-            || exponent_near_range_end(&best.spec, &best.fit.theta, exp);
+        // (within 1 % of an end: a bound hit is one)
+        let exponent_at_bound = exponent_near_range_end(&best.spec, &best.fit.theta, exp);
         if !(at_lower(coef)
             || exponent_zero
             || exponent_at_bound

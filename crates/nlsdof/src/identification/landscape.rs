@@ -247,12 +247,12 @@ pub fn landscape_cancellable(
         // 69.9x the noise and freed the gain)
         let cold = solve_rows(false, false);
         cancel.check()?;
+        let cost = |f: &Result<EquationErrorFit, EquationErrorError>| match f {
+            Ok(fit) if !degenerate(f) => fit.cost,
+            _ => f64::INFINITY,
+        };
         for (row, cold_row) in rows.iter_mut().zip(cold) {
             for (f, c) in row.iter_mut().zip(cold_row) {
-                let cost = |f: &Result<EquationErrorFit, EquationErrorError>| match f {
-                    Ok(f) if f.unidentifiable.is_empty() => f.cost,
-                    _ => f64::INFINITY,
-                };
                 if cost(&c) < cost(f) {
                     *f = c;
                 }

@@ -185,13 +185,21 @@ impl ResponseEquation {
     /// Sign-equivalent of `d/dt [e^{−e_min t}(P − 1)] ∝ P′(t) − e_min (P − 1)`,
     /// divided by `max(P, 1)` so it never overflows.
     pub(crate) fn level1(&self, t: f64, e_min: f64) -> f64 {
+        self.level1_and_ln_p(t, e_min).0
+    }
+
+    /// `(level1, ln P)` at `t` from one evaluation of the parts, each bit
+    /// for bit as [`Self::level1`] and [`Self::ln_p`] compute it.
+    #[inline]
+    pub(crate) fn level1_and_ln_p(&self, t: f64, e_min: f64) -> (f64, f64) {
         let (lp, slope) = self.ln_p_and_slope(t);
-        if lp > 0.0 {
+        let v = if lp > 0.0 {
             slope + e_min * ((-lp).exp() - 1.0)
         } else {
             let p = lp.exp();
             p * slope - e_min * (p - 1.0)
-        }
+        };
+        (v, lp)
     }
 
     /// `(ln P, d ln P/dt, d² ln P/dt²)` at `t = ln x`, the first two
@@ -332,6 +340,7 @@ impl ResponseEquation {
                 .into_iter()
                 .map(|t| (t + u, self.ln_p(t + u)))
                 .collect(),
+            inflection_ln_p: infl.iter().map(|&t| self.ln_p(t + u)).collect(),
             inflection: infl
                 .into_iter()
                 .map(|t| (t + u, self.level1(t + u, e_min)))
@@ -396,14 +405,20 @@ impl ResponseEquation {
             levels.iter_mut().flatten().for_each(|t| *t += u);
         }
         let level = |k: usize| levels.get(k).map_or(&[][..], |v| &v[..]);
+        let mut inflection_ln_p = Vec::new();
         Ok(FoldIndicators {
             e_min,
             roots: level(0).to_vec(),
             critical: level(1).iter().map(|&t| (t, self.ln_p(t))).collect(),
             inflection: level(2)
                 .iter()
-                .map(|&t| (t, self.level1(t, e_min)))
+                .map(|&t| {
+                    let (v, lp) = self.level1_and_ln_p(t, e_min);
+                    inflection_ln_p.push(lp);
+                    (t, v)
+                })
                 .collect(),
+            inflection_ln_p,
         })
     }
 
@@ -465,11 +480,19 @@ impl ResponseEquation {
     /// isolates the roots exactly) with any other number of sign changes, a
     /// hint where `ln P` is zero or not a number, or `n = 0`.
     ///
-    /// About 4n evaluations of `ln P` and a few Newton steps per root,
+    /// `separators` (hints expected between the roots: the critical points
+    /// of the nearby frequency) let most calls evaluate `ln P` at a few of
+    /// the hints only ([`Self::roots_by_anchors`]: the same roots, bit for
+    /// bit). About 2n evaluations of `ln P` and a few Newton steps per root,
     /// against several hundred for the exact isolation: the stepped sweep
     /// uses it between the samples of its fold search, where the count is
     /// known ([`super::folds`]).
-    pub(crate) fn roots_bracketed(&self, n: usize, hints: &mut Vec<f64>) -> Option<Vec<f64>> {
+    pub(crate) fn roots_bracketed(
+        &self,
+        n: usize,
+        hints: &mut Vec<f64>,
+        separators: &[f64],
+    ) -> Option<Vec<f64>> {
         if n == 0 {
             return None;
         }
@@ -482,6 +505,14 @@ impl ResponseEquation {
         let (first, last) = (hints[0], hints[hints.len() - 1]);
         hints.insert(0, first - 1.0);
         hints.push(last + 1.0);
+        self.roots_by_anchors(n, hints, separators)
+            .or_else(|| self.roots_at_every_hint(n, hints))
+    }
+
+    /// The roots from `ln P` at every one of the sorted `hints` (the outer
+    /// ones included): the bracketing [`Self::roots_by_anchors`] reproduces
+    /// with fewer evaluations, and its fallback.
+    fn roots_at_every_hint(&self, n: usize, hints: &[f64]) -> Option<Vec<f64>> {
         let mut prev = (hints[0], self.ln_p(hints[0]));
         let mut roots = Vec::with_capacity(n);
         for &t in &hints[1..] {
@@ -498,6 +529,59 @@ impl ResponseEquation {
             prev = (t, v);
         }
         (roots.len() == n).then_some(roots)
+    }
+
+    /// The roots of [`Self::roots_bracketed`] from fewer evaluations:
+    /// `ln P` at the ends of the sorted `hints` and at those of the
+    /// `separators` (hints expected between the roots: the critical points)
+    /// first; when exactly `n` of these anchor intervals change sign, each
+    /// holds the one pair of adjacent hints across which `ln P` changes
+    /// sign (the `n` roots allow no more than `n` sign changes in all), found
+    /// by bisection on the hints' indices, and the root is polished there by
+    /// [`Self::root_in`] exactly as the evaluation of every hint would have
+    /// it (same bracket, same values: the same roots to the last bit).
+    /// `None` (every hint is then evaluated) with another count, or a value
+    /// that is zero or not a number. About `n + 1 + n log₂(hints/n)`
+    /// evaluations of `ln P` instead of one per hint.
+    fn roots_by_anchors(&self, n: usize, hints: &[f64], separators: &[f64]) -> Option<Vec<f64>> {
+        let m = hints.len();
+        let mut anchors: Vec<usize> = Vec::with_capacity(separators.len() + 2);
+        anchors.push(0);
+        for s in separators {
+            if let Ok(i) = hints.binary_search_by(|h| h.total_cmp(s)) {
+                anchors.push(i);
+            }
+        }
+        anchors.push(m - 1);
+        anchors.sort_unstable();
+        anchors.dedup();
+        let value = |i: usize| {
+            let v = self.ln_p(hints[i]);
+            (v.is_finite() && v != 0.0).then_some(v)
+        };
+        let values: Vec<f64> = anchors.iter().map(|&i| value(i)).collect::<Option<_>>()?;
+        let changing: Vec<usize> = (1..anchors.len())
+            .filter(|&k| (values[k] > 0.0) != (values[k - 1] > 0.0))
+            .collect();
+        if changing.len() != n {
+            return None;
+        }
+        let mut roots = Vec::with_capacity(n);
+        for k in changing {
+            let (mut a, mut va) = (anchors[k - 1], values[k - 1]);
+            let (mut b, mut vb) = (anchors[k], values[k]);
+            while b - a > 1 {
+                let mid = a + (b - a) / 2;
+                let v = value(mid)?;
+                if (v > 0.0) == (va > 0.0) {
+                    (a, va) = (mid, v);
+                } else {
+                    (b, vb) = (mid, v);
+                }
+            }
+            roots.push(self.root_in(hints[a], hints[b], va, vb));
+        }
+        Some(roots)
     }
 
     /// The root of `ln P` in `(a, b)`, where `ln P(a)` = `fa` and
@@ -702,6 +786,8 @@ pub struct FoldIndicators {
     pub critical: Vec<(f64, f64)>,
     /// `(t, slope)` at each inflection point.
     pub inflection: Vec<(f64, f64)>,
+    /// `ln P` at each inflection point.
+    pub inflection_ln_p: Vec<f64>,
     /// The smallest exponent `e_min` of the expanded `P − 1`: the slope at
     /// an inflection point is that of `e^{−e_min t}(P − 1)`.
     pub e_min: f64,
@@ -738,11 +824,13 @@ mod tests {
     /// random hardening and softening equations (η down to −1) with one to
     /// three roots, hints perturbed from the exact roots and critical
     /// points. Every root agrees to 1e-14 relative; a bracketing that
-    /// does not find the count returns `None`, never wrong roots.
+    /// does not find the count returns `None`, never wrong roots; the
+    /// anchored bracketing (`roots_by_anchors`) returns the roots of the
+    /// evaluation at every hint bit for bit.
     #[test]
     fn newton_in_bracket_matches_brent() {
         let mut rnd = crate::harmonic_balance::test_uniform(0xb7ac_4e7e_d000_0001u64);
-        let (mut checked, mut bracketed, mut declined) = (0, 0, 0);
+        let (mut checked, mut bracketed, mut declined, mut same_bits) = (0, 0, 0, 0);
         for case in 0..4000 {
             let nu = 0.8 + 0.5 * rnd();
             let s0 = 1.0 - nu * nu;
@@ -780,8 +868,17 @@ mod tests {
             // the roots from perturbed hints, knowing the count
             let jitter = 1e-3 * (rnd() - 0.5);
             let mut hints: Vec<f64> = roots.iter().chain(&crit).map(|t| t + jitter).collect();
-            match eq.roots_bracketed(roots.len(), &mut hints) {
+            let crit_hints: Vec<f64> = crit.iter().map(|t| t + jitter).collect();
+            match eq.roots_bracketed(roots.len(), &mut hints, &crit_hints) {
                 Some(ts) => {
+                    // (hints now sorted, with the outer points): the
+                    // anchored bracketing against every hint, bit for bit
+                    let every = eq.roots_at_every_hint(roots.len(), &hints);
+                    let anchored = eq.roots_by_anchors(roots.len(), &hints, &crit_hints);
+                    if let (Some(a), Some(e)) = (&anchored, &every) {
+                        assert!(a.iter().zip(e).all(|(x, y)| x.to_bits() == y.to_bits()));
+                        same_bits += 1;
+                    }
                     assert_eq!(ts.len(), roots.len());
                     for (t, e) in ts.iter().zip(&roots) {
                         assert!(
@@ -796,13 +893,17 @@ mod tests {
             // a wrong count is declined, never answered
             if !roots.is_empty() {
                 let mut hints: Vec<f64> = roots.iter().chain(&crit).copied().collect();
-                assert!(eq.roots_bracketed(roots.len() + 2, &mut hints).is_none());
+                assert!(eq
+                    .roots_bracketed(roots.len() + 2, &mut hints, &crit)
+                    .is_none());
             }
         }
         eprintln!(
-            "{checked} roots against Brent; {bracketed} root sets bracketed, {declined} declined"
+            "{checked} roots against Brent; {bracketed} root sets bracketed, {declined} declined; \
+             {same_bits} from anchors bit for bit as from every hint"
         );
         assert!(checked > 4000 && bracketed > 3000, "{checked} {bracketed}");
+        assert!(same_bits > 3000, "{same_bits}");
     }
 
     /// The slopes of the warm isolation's evaluators against central

@@ -153,16 +153,21 @@ fn sample(r: &ForcedResponse, omega: f64, warm: Option<&Sample>) -> Result<Sampl
         .iter()
         .map(|&(t, _)| (hi.ln_p(t) - lo.ln_p(t)) / (2.0 * RATE_STEP))
         .collect();
-    let infl_rate = ind
+    // (level1 and ln P of each side from one evaluation of its parts; ln P
+    // at the point itself from the isolation)
+    let (infl_rate, infl_ln_p) = ind
         .inflection
         .iter()
-        .map(|&(t, _)| (hi.level1(t, ind.e_min) - lo.level1(t, ind.e_min)) / (2.0 * RATE_STEP))
-        .collect();
-    let infl_ln_p = ind
-        .inflection
-        .iter()
-        .map(|&(t, _)| (eq.ln_p(t), (hi.ln_p(t) - lo.ln_p(t)) / (2.0 * RATE_STEP)))
-        .collect();
+        .zip(&ind.inflection_ln_p)
+        .map(|(&(t, _), &lp)| {
+            let (h1, hp) = hi.level1_and_ln_p(t, ind.e_min);
+            let (l1, lp_lo) = lo.level1_and_ln_p(t, ind.e_min);
+            (
+                (h1 - l1) / (2.0 * RATE_STEP),
+                (lp, (hp - lp_lo) / (2.0 * RATE_STEP)),
+            )
+        })
+        .unzip();
     Ok(Sample {
         omega,
         count: ind.roots.len(),
@@ -502,12 +507,29 @@ pub(crate) fn find_folds(r: &ForcedResponse, lo: f64, hi: f64) -> Result<Vec<Fol
     find_folds_with(r, lo, hi, Locator::CriticalValue)
 }
 
-fn find_folds_with(
+/// The lowest fold in `[lo, hi]` at which a pair of roots vanishes with
+/// increasing frequency (`pair_above == false`: where a branch followed
+/// upwards ends), or `None`: the fold [`find_folds`] would list first among
+/// those, found by the same search stopped after the first grid cell that
+/// holds one (the cells before it are searched as there, so it is the same
+/// fold to the last bit; test `first_fold_ending_upwards_is_find_folds_first`).
+pub(crate) fn first_fold_ending_upwards(
     r: &ForcedResponse,
     lo: f64,
     hi: f64,
-    locator: Locator,
-) -> Result<Vec<Fold>, SolveError> {
+) -> Result<Option<Fold>, SolveError> {
+    let (grid, eqs) = fixed_grid(r, lo, hi)?;
+    let (folds, _) = search_until(r, &grid, &eqs, Locator::CriticalValue, Some(false))?;
+    Ok(folds.into_iter().find(|f| !f.pair_above))
+}
+
+/// The fixed log-spaced grid of [`GRID`] cells over `[lo, hi]` and its
+/// equations.
+fn fixed_grid(
+    r: &ForcedResponse,
+    lo: f64,
+    hi: f64,
+) -> Result<(Vec<f64>, Vec<ResponseEquation>), SolveError> {
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
         return Err(ParameterError::InvalidRange { min: lo, max: hi }.into());
     }
@@ -521,6 +543,16 @@ fn find_folds_with(
         })
         .collect();
     let eqs: Vec<_> = grid.iter().map(|&w| r.equation(w)).collect();
+    Ok((grid, eqs))
+}
+
+fn find_folds_with(
+    r: &ForcedResponse,
+    lo: f64,
+    hi: f64,
+    locator: Locator,
+) -> Result<Vec<Fold>, SolveError> {
+    let (grid, eqs) = fixed_grid(r, lo, hi)?;
     Ok(search(r, &grid, &eqs, locator)?.0)
 }
 
@@ -633,7 +665,7 @@ pub(crate) fn find_folds_on_steps(
                     .flatten()
                     .copied()
                     .collect();
-                roots[i] = eqs[i].roots_bracketed(ia.roots.len(), &mut hints);
+                roots[i] = eqs[i].roots_bracketed(ia.roots.len(), &mut hints, &cm);
             }
         }
     }
@@ -653,6 +685,19 @@ fn search(
     grid: &[f64],
     eqs: &[ResponseEquation],
     locator: Locator,
+) -> Result<(Vec<Fold>, Vec<Option<Isolated>>), SolveError> {
+    search_until(r, grid, eqs, locator, None)
+}
+
+/// [`search`], stopped after the first cell (with its refinement) that
+/// holds a fold with `pair_above == stop` when `stop` is given (the grid
+/// points beyond it are not sampled).
+fn search_until(
+    r: &ForcedResponse,
+    grid: &[f64],
+    eqs: &[ResponseEquation],
+    locator: Locator,
+    stop: Option<bool>,
 ) -> Result<(Vec<Fold>, Vec<Option<Isolated>>), SolveError> {
     let mut out = Vec::new();
     let mut roots: Vec<Option<Isolated>> = vec![None; grid.len()];
@@ -682,6 +727,9 @@ fn search(
         let mut b = sample(r, grid[i], Some(&a))?;
         roots[i] = Some(b.isolated());
         locate(r, &a, &b, 0, &mut budget, locator, &mut out)?;
+        if stop.is_some_and(|p| out.iter().any(|f| f.pair_above == p)) {
+            break;
+        }
         prev = Some(b);
     }
     out.sort_by(|a, b| a.omega.total_cmp(&b.omega));
@@ -968,6 +1016,47 @@ mod tests {
              largest difference {worst:e} (relative to 1 + |t|)"
         );
         assert!(folds > 200 && shared > 10_000, "{folds} {shared}");
+    }
+
+    /// The search stopped at the first fold ending upwards (used for the
+    /// fold beyond a measured up-sweep) against the full search's first
+    /// such fold (the oracle), bit for bit, on random hardening and
+    /// softening models (η down to Coulomb friction) over the range above
+    /// the resonance and over a wide range; `None` exactly where the full
+    /// search has no such fold.
+    #[test]
+    fn first_fold_ending_upwards_is_find_folds_first() {
+        let mut rnd = crate::harmonic_balance::test_uniform(0xf1e5_7f01_0000_0003u64);
+        let (mut found, mut none) = (0, 0);
+        for case in 0..300 {
+            let wn = 10.0;
+            let model = random_model(&mut rnd, case, wn);
+            let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
+            let Ok(r) =
+                ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance)
+            else {
+                continue;
+            };
+            for (lo, hi) in [(wn, 2.0 * wn), (0.5 * wn, 3.0 * wn)] {
+                let Ok(all) = find_folds(&r, lo, hi) else {
+                    continue;
+                };
+                let oracle = all.into_iter().find(|f| !f.pair_above);
+                let first = first_fold_ending_upwards(&r, lo, hi).unwrap();
+                match (oracle, first) {
+                    (Some(f), Some(g)) => {
+                        assert_eq!(f.omega.to_bits(), g.omega.to_bits(), "{model:?} γ={gamma}");
+                        assert_eq!(f.amplitude.to_bits(), g.amplitude.to_bits());
+                        assert!(!g.pair_above);
+                        found += 1;
+                    }
+                    (None, None) => none += 1,
+                    (f, g) => panic!("{f:?} vs {g:?}: {model:?} γ={gamma}"),
+                }
+            }
+        }
+        eprintln!("{found} first folds equal bit for bit, {none} ranges without one");
+        assert!(found > 150 && none > 50, "{found} {none}");
     }
 
     /// The warm-started isolation against the cold one (the oracle): on

@@ -399,6 +399,18 @@ impl ForcedResponse {
         folds::find_folds(self, omega_min, omega_max)
     }
 
+    /// The lowest fold in `[omega_min, omega_max]` (rad/s) at which a
+    /// branch followed with increasing frequency ends (a pair of roots
+    /// vanishes upwards): the first such fold of [`Self::folds`], found
+    /// without searching the range beyond it.
+    pub fn first_fold_ending_upwards(
+        &self,
+        omega_min: f64,
+        omega_max: f64,
+    ) -> Result<Option<Fold>, SolveError> {
+        folds::first_fold_ending_upwards(self, omega_min, omega_max)
+    }
+
     /// Stepped-sine sweep over the strictly increasing frequencies `omegas`
     /// (rad/s), in `direction` (for `Down` the points are returned in sweep
     /// order, i.e. decreasing frequency). See [`sweep`](self) for the rules.

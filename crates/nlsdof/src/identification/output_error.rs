@@ -404,10 +404,10 @@ fn fold_beyond(r: &ForcedResponse, c: &Curve) -> Result<Option<(f64, f64)>, Solv
     let (lo, hi) = (c.omegas[0], c.omegas[c.omegas.len() - 1]);
     let span = (hi - lo).max(0.1 * hi);
     Ok(match c.direction {
+        // (the search stops at the first such fold: the same fold as the
+        // first of `folds(hi, hi + span)` ending upwards)
         SweepDirection::Up => r
-            .folds(hi, hi + span)?
-            .into_iter()
-            .find(|f| !f.pair_above)
+            .first_fold_ending_upwards(hi, hi + span)?
             .map(|f| (f.omega, f.amplitude)),
         SweepDirection::Down => r
             .folds((lo - span).max(0.5 * lo), lo)?

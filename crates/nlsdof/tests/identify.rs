@@ -817,6 +817,45 @@ fn a_fold_pinned_at_a_measured_step_is_moved_into_its_cell() {
     assert!((wf - lo).min(hi - wf) > 0.05 * (hi - lo), "{lo} {wf} {hi}");
 }
 
+/// Blind h002-mixed (`../shared/tools/blind_suite.py`, seed 2711270052:
+/// four levels swept up, 200 steps, no phase, ρ = 3.14, η = 0.41). The
+/// equation-error landscape's chained rows collapsed to δ = κ = 0 (rank
+/// deficient, not candidates) for every η from 0.35 to 4.4, and the fit
+/// ended at η 3.43 within its noise at 1.215x the truth's Eq 31 cost, a
+/// miss without a flag. Rows the chain left wholly degenerate are solved
+/// cold: the row through the truth's η is solved, and the default fit
+/// reaches the optimum and stays trusted.
+#[test]
+fn landscape_rows_the_chain_collapsed_are_solved_cold() {
+    let data = blind_set(include_str!("data/blind_h002_mixed.csv"));
+    let m = 0.09144455052795457;
+    let truth = Parameters::from([
+        156670.19308948045 / m,
+        0.6364599795444507 / m,
+        3.406744299389431e17 / m,
+        3.1446761608647855,
+        0.5231784648906079 / m,
+        0.41035792066712706,
+        1.0,
+    ]);
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert_trusted(&id);
+    let land = &id.landscape;
+    let j = land
+        .eta
+        .iter()
+        .position(|&e| (e - 0.35).abs() < 1e-9)
+        .expect("a row at eta 0.35");
+    let solved = (0..land.rho.len())
+        .filter(|&i| land.at(i, j).is_finite())
+        .count();
+    assert!(
+        solved > land.rho.len() / 2,
+        "{solved} of {}",
+        land.rho.len()
+    );
+}
+
 /// An exponent held at 0 with its coefficient free makes the term a copy
 /// of the linear one: a typed error naming both, not a landscape whose
 /// every node is rank-deficient (which named the wrong pair for η).

@@ -19,7 +19,8 @@
 //!    Profile-likelihood intervals of the exponents come from the same map.
 //!    A single-row landscape (no nonlinear damping, or η held) is also
 //!    solved node by node cold (its one warm-started chain starts at the
-//!    degenerate ρ = 0). κ held at 0 is the model without the term; an
+//!    degenerate ρ = 0), and so is, with several levels, a row the chain
+//!    left wholly degenerate. κ held at 0 is the model without the term; an
 //!    exponent held at 0 with its coefficient free is refused
 //!    ([`SpecError::CopiesLinear`]).
 //! 3. **Gain screen** (`screen_gain`): the forcing gain (a point of a
@@ -93,9 +94,12 @@
 //!    minimum, both signs), other jump assignments (folds moved past the
 //!    points still on their branch), a multistart of
 //!    [`ESCALATION_STARTS`], then each exponent held across its range
-//!    (`profile_exponents`); a lower objective goes through stages 5–7
-//!    again. If it still does not fit, the result says so ([`Adequacy`],
-//!    [`Identification::warning`]). A fit within its noise with a fold
+//!    (`profile_exponents`, started from the fit and from the landscape);
+//!    a lower objective goes through stages 5–7 again. If it still does
+//!    not fit, the result says so ([`Adequacy`],
+//!    [`Identification::warning`]). A fit of several levels within its
+//!    noise but above [`PROFILE_NEAR_NOISE`] of it gets the exponent
+//!    profile alone (its miss would be silent). A fit within its noise with a fold
 //!    pinned against a measured step has it moved into its step cell and
 //!    refitted (`unpin_folds`), kept when lower and still within the noise.
 //! 9. **Jump readings** (`decide_readings`, [`ReadingChoice::Auto`], only
@@ -1180,6 +1184,30 @@ fn stages(
                 let judged = judge(&fit_data, &alt);
                 adopt((&mut best, &mut curves, &mut adequacy), alt, judged);
                 gain_test = alt_gain;
+            }
+        }
+    }
+    // A fit of several levels within its noise but near its top can sit in
+    // another basin of an exponent, silently (`PROFILE_NEAR_NOISE`): the
+    // escalation's exponent profile, from the fit on the race's data; a
+    // freed fit with a lower objective there goes through the decisions and
+    // is kept if its objective on every point is lower.
+    if adequacy.adequate && !single_level && plan.escalate && adequacy.ratio > PROFILE_NEAR_NOISE {
+        let start = restarted(&best.spec, &best.fit.theta);
+        let spec = carry_readings(&start, &fit_data, &refine_data);
+        let here = Fitted::assessed(&refine_data, spec, best.fit.theta, &best.fit)?;
+        if let Some((p, held)) = profile_exponents(&setup, &ex, &refine_data, &here, progress) {
+            adequacy.escalation.push(format!(
+                "{held} fits with an exponent held across its range"
+            ));
+            if p.objective < here.objective * (1.0 - 1e-6) {
+                let mut alt_gain = gain_test;
+                let alt = finish(&setup, p, &fit_data, &refine_data, &mut alt_gain, progress)?;
+                if alt.objective < best.objective {
+                    let judged = judge(&fit_data, &alt);
+                    adopt((&mut best, &mut curves, &mut adequacy), alt, judged);
+                    gain_test = alt_gain;
+                }
             }
         }
     }
@@ -3370,10 +3398,24 @@ pub const PROFILE_VALUES: usize = 8;
 /// flag is the self-check's: this only decides how far the search goes.
 pub const PROFILE_MAX_RATIO: f64 = 20.0;
 
+/// A fit of several levels that fits its noise but whose residual over all
+/// points is above this ratio ([`Adequacy::ratio`]) gets the exponent
+/// profile too (`profile_exponents`): its miss would be silent, the
+/// self-check cannot tell 1.2x the truth's Eq 31 cost from noise (measured:
+/// blind h046-mixed, seed 2711270093, two levels up without phase, ρ 5.80,
+/// η 0.84: the fit ended at η 1.70, residual 1.19x the noise, 1.227x the
+/// truth's cost; the profile's start from the landscape at η 0.35 reaches
+/// its optimum). Set from 120 blind in-family fits that found their
+/// optimum (seeds 2711270071/72): residual over the noise median 1.02, 90th
+/// percentile 1.11; about 8 in 100 of those of several levels lie above
+/// 1.1, and take the profile's time.
+pub const PROFILE_NEAR_NOISE: f64 = 1.1;
+
 /// Stage 8, escalation: each free exponent of `from` held in turn at up to
 /// [`PROFILE_VALUES`] values across the landscape's axis (its coefficient
 /// kept at its reference value, `β_ref` or `κ_ref`, so the held fit starts
-/// with the same equivalent stiffness or damping at the largest amplitude)
+/// with the same equivalent stiffness or damping at the largest amplitude;
+/// and a second start from the landscape there, [`held_from_landscape`])
 /// and the other parameters refitted; the two best held fits are then
 /// refitted with the exponent free. A basin of the other exponent that no
 /// landscape node reached and no random start found is one exponent away
@@ -3403,7 +3445,7 @@ fn profile_exponents(
             continue;
         }
         let every = axis.len().div_ceil(PROFILE_VALUES);
-        for &v in axis.iter().step_by(every) {
+        for (k, &v) in axis.iter().enumerate().step_by(every) {
             if (v - th[exp]).abs() < 0.25 {
                 continue;
             }
@@ -3411,12 +3453,14 @@ fn profile_exponents(
             t[coef] =
                 th[coef] * g_unchecked(th[exp]) * r.powf(th[exp]) / (g_unchecked(v) * r.powf(v));
             t[exp] = v;
-            if !t[coef].is_finite() || t[coef] == 0.0 {
-                continue;
+            if t[coef].is_finite() && t[coef] != 0.0 {
+                let mut spec = restarted(&from.spec, &t);
+                spec.status[exp] = Status::Fixed(v);
+                jobs.push(spec);
             }
-            let mut spec = restarted(&from.spec, &t);
-            spec.status[exp] = Status::Fixed(v);
-            jobs.push(spec);
+            if let Some(spec) = held_from_landscape(setup, ex, work, from, exp, k) {
+                jobs.push(spec);
+            }
         }
     }
     if jobs.is_empty() {
@@ -3453,6 +3497,82 @@ fn profile_exponents(
         }
     }
     best.map(|b| (b, held))
+}
+
+/// The second start of [`profile_exponents`] at the held value `axis[k]`
+/// of exponent `exp`: the landscape's equation-error fit at the lowest node
+/// of that line of the held axis (or of the nearest line with a solved
+/// node, its coefficient rescaled to keep the equivalent stiffness or
+/// damping at the reference amplitude), with the fit's sign, gain status
+/// and readings. The start scaled from the fit keeps the fit's linear part
+/// and folds, which can hold the held fit in the fit's basin: measured on
+/// blind h013-mixed (seed 110808810) once the landscape's collapsed rows
+/// were solved (stage 2), the race ended at η 0.40, 84x the truth's Eq 31
+/// cost, and no start scaled from it reached the basin; from the
+/// landscape's nodes the profile reaches 0.982x.
+fn held_from_landscape(
+    setup: &Setup,
+    ex: &Exploration,
+    work: &Dataset,
+    from: &Fitted,
+    exp: usize,
+    k: usize,
+) -> Option<FitSpec> {
+    use crate::power_law::g_unchecked;
+    let land = &ex.land;
+    let along_rho = exp == ETA;
+    let (n_other, n_axis) = if along_rho {
+        (land.rho.len(), land.eta.len())
+    } else {
+        (land.eta.len(), land.rho.len())
+    };
+    let lowest = |kk: usize| {
+        (0..n_other)
+            .map(|o| if along_rho { (o, kk) } else { (kk, o) })
+            .filter(|&(i, j)| land.at(i, j).is_finite() && land.fit_at(i, j).is_some())
+            .min_by(|&(a, b), &(c, d)| land.at(a, b).total_cmp(&land.at(c, d)))
+    };
+    let (i, j) = (0..n_axis)
+        .flat_map(|d| [k.checked_sub(d), (d > 0).then_some(k + d)])
+        .flatten()
+        .filter(|&kk| kk < n_axis)
+        .find_map(lowest)?;
+    let mut ee = land.fit_at(i, j)?.clone();
+    let gain = from.spec.status[GAIN];
+    if let Status::Fixed(g) = gain {
+        if (ee.theta[GAIN] - g).abs() > 1e-9 * g.abs() {
+            ee = solve_held_gain(setup, ex, g, land.rho[i], land.eta[j]).ok()?;
+        }
+    }
+    let sign = if from.fit.theta[BETA] < 0.0 {
+        Sign::Softening
+    } else {
+        Sign::Hardening
+    };
+    let mut spec = candidate_spec(setup, work, &ee, sign, gain).ok()?;
+    spec.censored = from.spec.censored.clone();
+    let (v, coef) = if exp == ETA {
+        (land.eta[k], KAPPA)
+    } else {
+        (land.rho[k], BETA)
+    };
+    let sc = spec.scales;
+    let r = if exp == ETA {
+        sc.a_ref * sc.omega_ref
+    } else {
+        sc.a_ref
+    };
+    let (e0, c0) = (spec.start[exp], spec.start[coef]);
+    if e0 != v {
+        let c = c0 * g_unchecked(e0) * r.powf(e0) / (g_unchecked(v) * r.powf(v));
+        if !(c.is_finite() && c != 0.0) {
+            return None;
+        }
+        spec.start[coef] = c;
+    }
+    spec.status[exp] = Status::Fixed(v);
+    spec.start[exp] = v;
+    Some(spec)
 }
 
 /// Fewest points per level a subsample aims to keep: data with more levels

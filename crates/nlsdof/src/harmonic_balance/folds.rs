@@ -857,6 +857,21 @@ mod tests {
         }
     }
 
+    /// A random model of the fold tests ([`random_model`]) at a random
+    /// forcing level γ (10^−0.5 … 10), with its forced response (`None`
+    /// where the model admits none).
+    fn random_response(
+        rnd: &mut impl FnMut() -> f64,
+        case: usize,
+        wn: f64,
+    ) -> Option<(NormalisedModel, f64, ForcedResponse)> {
+        let model = random_model(rnd, case, wn);
+        let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
+        let r =
+            ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance).ok()?;
+        Some((model, gamma, r))
+    }
+
     /// Narrow hysteresis windows just above the cusp, against an exact-count
     /// oracle: for random hardening and softening models (η down to Coulomb
     /// friction) the level where three roots first appear within ±3 % of
@@ -970,11 +985,7 @@ mod tests {
         let (mut folds, mut shared, mut worst) = (0, 0, 0.0f64);
         for case in 0..200 {
             let wn = 10.0;
-            let model = random_model(&mut rnd, case, wn);
-            let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
-            let Ok(r) =
-                ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance)
-            else {
+            let Some((model, gamma, r)) = random_response(&mut rnd, case, wn) else {
                 continue;
             };
             let (lo, hi) = (0.5 * wn, 3.0 * wn);
@@ -1030,11 +1041,7 @@ mod tests {
         let (mut found, mut none) = (0, 0);
         for case in 0..300 {
             let wn = 10.0;
-            let model = random_model(&mut rnd, case, wn);
-            let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
-            let Ok(r) =
-                ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance)
-            else {
+            let Some((model, gamma, r)) = random_response(&mut rnd, case, wn) else {
                 continue;
             };
             for (lo, hi) in [(wn, 2.0 * wn), (0.5 * wn, 3.0 * wn)] {

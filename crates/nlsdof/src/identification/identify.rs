@@ -1195,8 +1195,12 @@ fn stages(
     if adequacy.adequate && !single_level && plan.escalate && adequacy.ratio > PROFILE_NEAR_NOISE {
         let start = restarted(&best.spec, &best.fit.theta);
         let spec = carry_readings(&start, &fit_data, &refine_data);
-        let here = Fitted::assessed(&refine_data, spec, best.fit.theta, &best.fit)?;
-        if let Some((p, held)) = profile_exponents(&setup, &ex, &refine_data, &here, progress) {
+        // (a fit the race's data cannot assess is left as it is)
+        let here = Fitted::assessed(&refine_data, spec, best.fit.theta, &best.fit).ok();
+        let profiled = here.as_ref().and_then(|here| {
+            profile_exponents(&setup, &ex, &refine_data, here, progress).map(|p| (here, p))
+        });
+        if let Some((here, (p, held))) = profiled {
             adequacy.escalation.push(format!(
                 "{held} fits with an exponent held across its range"
             ));

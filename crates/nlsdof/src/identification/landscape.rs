@@ -238,7 +238,10 @@ pub fn landscape_cancellable(
     };
     // several forcing levels (distinct γ) separate the linear and the
     // nonlinear damping
-    let several_levels = prep.points.iter().any(|p| p.gamma != prep.points[0].gamma);
+    let several_levels = prep
+        .points
+        .first()
+        .is_some_and(|p0| prep.points.iter().any(|p| p.gamma != p0.gamma));
     if matches!(phase, LandscapePhase::Ignore) && rows.iter().flatten().all(degenerate) {
         rows = solve_rows(false, false);
         cancel.check()?;

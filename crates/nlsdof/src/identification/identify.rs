@@ -1170,21 +1170,8 @@ fn stages(
         // an escalation that found no lower objective than the race (on the
         // same data, same reading) is not carried through the decisions
         if let Some(alt) = alt.filter(|a| a.objective < race_objective * (1.0 - 1e-6)) {
-            let mut alt_gain = gain_test;
-            let alt = finish(
-                &setup,
-                alt,
-                &fit_data,
-                &refine_data,
-                &mut alt_gain,
-                progress,
-            )?;
-            // both read exactly, on every point: the lower objective wins
-            if alt.objective < best.objective {
-                let judged = judge(&fit_data, &alt);
-                adopt((&mut best, &mut curves, &mut adequacy), alt, judged);
-                gain_test = alt_gain;
-            }
+            let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
+            finish_and_adopt_if_lower(&setup, alt, (&fit_data, &refine_data), result, progress)?;
         }
     }
     // A fit of several levels within its noise but near its top can sit in
@@ -1205,13 +1192,8 @@ fn stages(
                 "{held} fits with an exponent held across its range"
             ));
             if p.objective < here.objective * (1.0 - 1e-6) {
-                let mut alt_gain = gain_test;
-                let alt = finish(&setup, p, &fit_data, &refine_data, &mut alt_gain, progress)?;
-                if alt.objective < best.objective {
-                    let judged = judge(&fit_data, &alt);
-                    adopt((&mut best, &mut curves, &mut adequacy), alt, judged);
-                    gain_test = alt_gain;
-                }
+                let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
+                finish_and_adopt_if_lower(&setup, p, (&fit_data, &refine_data), result, progress)?;
             }
         }
     }
@@ -1977,6 +1959,32 @@ fn finish(
         }
     }
     judged_on_all(best, fit_data, refine_data)
+}
+
+/// `alt` (a lower objective found on the race's data) carried through the
+/// decisions and every point (`finish`), with its own gain test; it
+/// replaces the result `(best, curves, adequacy, gain_test)` ([`adopt`])
+/// when its objective there is lower (both read exactly, on every point).
+fn finish_and_adopt_if_lower(
+    setup: &Setup,
+    alt: Fitted,
+    (fit_data, refine_data): (&Dataset, &Dataset),
+    (best, curves, adequacy, gain_test): (
+        &mut Fitted,
+        &mut Vec<CurveReport>,
+        &mut Adequacy,
+        &mut Option<GainTest>,
+    ),
+    progress: &(dyn Fn(IdentifyProgress) + Sync),
+) -> Result<(), IdentifyError> {
+    let mut alt_gain = *gain_test;
+    let alt = finish(setup, alt, fit_data, refine_data, &mut alt_gain, progress)?;
+    if alt.objective < best.objective {
+        let judged = judge(fit_data, &alt);
+        adopt((best, curves, adequacy), alt, judged);
+        *gain_test = alt_gain;
+    }
+    Ok(())
 }
 
 /// `alt`, with its judgement (`judge`), replaces the result `(best,
@@ -3435,15 +3443,14 @@ fn profile_exponents(
     from: &Fitted,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Option<(Fitted, usize)> {
-    use crate::power_law::g_unchecked;
     use rayon::prelude::*;
     let plan = setup.plan;
     let th = from.fit.theta;
     let sc = from.spec.scales;
     let mut jobs: Vec<FitSpec> = Vec::new();
     for (coef, exp, axis, r) in [
-        (KAPPA, ETA, &ex.land.eta, sc.a_ref * sc.omega_ref),
-        (BETA, RHO, &ex.land.rho, sc.a_ref),
+        (KAPPA, ETA, &ex.land.eta, reference(ETA, &sc)),
+        (BETA, RHO, &ex.land.rho, reference(RHO, &sc)),
     ] {
         if from.spec.status[exp] != Status::Free || th[coef] == 0.0 || axis.len() < 2 {
             continue;
@@ -3454,8 +3461,7 @@ fn profile_exponents(
                 continue;
             }
             let mut t = th;
-            t[coef] =
-                th[coef] * g_unchecked(th[exp]) * r.powf(th[exp]) / (g_unchecked(v) * r.powf(v));
+            t[coef] = equivalent_at_reference(th[coef], th[exp], v, r);
             t[exp] = v;
             if t[coef].is_finite() && t[coef] != 0.0 {
                 let mut spec = restarted(&from.spec, &t);
@@ -3522,7 +3528,6 @@ fn held_from_landscape(
     exp: usize,
     k: usize,
 ) -> Option<FitSpec> {
-    use crate::power_law::g_unchecked;
     let land = &ex.land;
     let along_rho = exp == ETA;
     let (n_other, n_axis) = if along_rho {
@@ -3560,15 +3565,10 @@ fn held_from_landscape(
     } else {
         (land.rho[k], BETA)
     };
-    let sc = spec.scales;
-    let r = if exp == ETA {
-        sc.a_ref * sc.omega_ref
-    } else {
-        sc.a_ref
-    };
+    let r = reference(exp, &spec.scales);
     let (e0, c0) = (spec.start[exp], spec.start[coef]);
     if e0 != v {
-        let c = c0 * g_unchecked(e0) * r.powf(e0) / (g_unchecked(v) * r.powf(v));
+        let c = equivalent_at_reference(c0, e0, v, r);
         if !(c.is_finite() && c != 0.0) {
             return None;
         }
@@ -3577,6 +3577,24 @@ fn held_from_landscape(
     spec.status[exp] = Status::Fixed(v);
     spec.start[exp] = v;
     Some(spec)
+}
+
+/// The reference of exponent `exp`'s power law: the largest measured
+/// amplitude `A_ref` for ρ, `Ω_ref A_ref` for η.
+fn reference(exp: usize, sc: &super::objective::Scales) -> f64 {
+    if exp == ETA {
+        sc.a_ref * sc.omega_ref
+    } else {
+        sc.a_ref
+    }
+}
+
+/// The coefficient that, with exponent `to`, has the equivalent (first
+/// harmonic) coefficient `c` has with exponent `from` at the reference `r`:
+/// `c g(from) r^from / (g(to) r^to)`.
+fn equivalent_at_reference(c: f64, from: f64, to: f64, r: f64) -> f64 {
+    use crate::power_law::g_unchecked;
+    c * g_unchecked(from) * r.powf(from) / (g_unchecked(to) * r.powf(to))
 }
 
 /// Fewest points per level a subsample aims to keep: data with more levels

@@ -174,10 +174,11 @@ pub fn landscape_cancellable(
     let nr = rv.len();
     // `chain`: each node of a row without phase starts from the previous
     // node's solution
-    let solve_rows = |chain: bool,
+    let solve_rows = |etas: &[f64],
+                      chain: bool,
                       report: bool|
      -> Vec<Vec<Result<EquationErrorFit, EquationErrorError>>> {
-        ev.par_iter()
+        etas.par_iter()
             .map(|&e| {
                 let mut warm: Option<Vec<f64>> = None;
                 let row: Vec<_> = rv
@@ -223,7 +224,7 @@ pub fn landscape_cancellable(
             })
             .collect()
     };
-    let mut rows = solve_rows(true, true);
+    let mut rows = solve_rows(&ev, true, true);
     cancel.check()?;
     // the chain can carry a degenerate node (ρ = 0: β a copy of α) along a
     // whole row; when no node is left, every node is solved on its own
@@ -243,7 +244,7 @@ pub fn landscape_cancellable(
         .first()
         .is_some_and(|p0| prep.points.iter().any(|p| p.gamma != p0.gamma));
     if matches!(phase, LandscapePhase::Ignore) && rows.iter().flatten().all(degenerate) {
-        rows = solve_rows(false, false);
+        rows = solve_rows(&ev, false, false);
         cancel.check()?;
     } else if matches!(phase, LandscapePhase::Ignore)
         && several_levels
@@ -263,12 +264,15 @@ pub fn landscape_cancellable(
         // separate δ from κ, where a degenerate row can be the data's (the
         // unscreened suite's one-level cases gained nothing and one of them
         // ended just above the self-check's threshold, a false alarm).
-        let cold = solve_rows(false, false);
+        // (only those rows are solved again: the nodes are independent cold)
+        let again: Vec<usize> = (0..rows.len())
+            .filter(|&j| rows[j].iter().all(degenerate))
+            .collect();
+        let etas: Vec<f64> = again.iter().map(|&j| ev[j]).collect();
+        let cold = solve_rows(&etas, false, false);
         cancel.check()?;
-        for (row, cold_row) in rows.iter_mut().zip(cold) {
-            if row.iter().all(degenerate) {
-                *row = cold_row;
-            }
+        for (j, cold_row) in again.into_iter().zip(cold) {
+            rows[j] = cold_row;
         }
     } else if matches!(phase, LandscapePhase::Ignore) && ev.len() == 1 && nr > 1 {
         // a single row (no nonlinear damping, or η held) is one chain from
@@ -280,7 +284,7 @@ pub fn landscape_cancellable(
         // 914, above the cost 45.3 its node ρ 5.25 has with the gain held
         // at 1, a point of the free-gain problem; the race from it stuck
         // 69.9x the noise and freed the gain)
-        let cold = solve_rows(false, false);
+        let cold = solve_rows(&ev, false, false);
         cancel.check()?;
         let cost = |f: &Result<EquationErrorFit, EquationErrorError>| match f {
             Ok(fit) if !degenerate(f) => fit.cost,

@@ -652,6 +652,32 @@ fn a_single_level_is_searched_as_widely_as_a_misfit() {
     assert!(!id.adequacy.escalation.is_empty(), "{:?}", id.adequacy);
 }
 
+/// A blind in-family set (`../shared/tools/blind_suite.py`, seed
+/// 2611270019, case h027-mixed: one level swept up and down, 120 steps, no
+/// phase, ρ = 2.38, η = 0.64). Eq 31 is nearly flat in η here (held at 0.35
+/// the default pipeline's objective is below the truth's), and for three
+/// sessions the fit ended elsewhere on that flat valley, 1.13–1.33× the
+/// truth's cost and within the noise: a miss without a flag. Found since the
+/// exponent profile also starts from the landscape (0.998×); the flat
+/// direction is named: δ and κ trade off along a ridge, intervals not valid.
+#[test]
+fn a_single_level_flat_in_eta_reaches_the_optimum_and_names_the_ridge() {
+    let data = blind_set(include_str!("data/blind_h027_mixed.csv"));
+    let m = 0.07311876677744167;
+    let truth = Parameters::from([
+        932597.8521311749 / m,
+        2.828484891012489 / m,
+        5.564766255374733e18 / m,
+        2.3754726025068047,
+        67.8373517200117 / m,
+        0.6382314100844745,
+        1.0,
+    ]);
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert_trusted(&id);
+    assert!(!id.fit.intervals_valid(), "{:?}", id.fit.warning());
+}
+
 /// Blind set h013-mixed (`../shared/tools/blind_suite.py`, seed
 /// 110808810: four levels swept up and down, 200 steps, no phase, ρ = 4.70,
 /// η = 1.24) and its truth (mass-normalised).

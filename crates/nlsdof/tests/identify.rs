@@ -497,6 +497,13 @@ fn default_fit_finds_the_optimum(data: &Dataset, truth: &Parameters) -> Identifi
     id
 }
 
+/// The mass-normalised truth (gain 1) of a blind set from its physical
+/// parameters as `blind_suite.py` draws them: mass `m` (kg), `[k, c, k_r]`
+/// (N/m, N s/m, N/m^(ρ+1)) and `[ρ, c_e, η]`.
+fn physical_truth(m: f64, [k, c, k_r]: [f64; 3], [rho, c_e, eta]: [f64; 3]) -> Parameters {
+    Parameters::from([k / m, c / m, k_r / m, rho, c_e / m, eta, 1.0])
+}
+
 /// The fit says nothing alarming: converged, and adequate to its noise.
 fn assert_trusted(id: &Identification) {
     assert!(
@@ -663,16 +670,11 @@ fn a_single_level_is_searched_as_widely_as_a_misfit() {
 #[test]
 fn a_single_level_flat_in_eta_reaches_the_optimum_and_names_the_ridge() {
     let data = blind_set(include_str!("data/blind_h027_mixed.csv"));
-    let m = 0.07311876677744167;
-    let truth = Parameters::from([
-        932597.8521311749 / m,
-        2.828484891012489 / m,
-        5.564766255374733e18 / m,
-        2.3754726025068047,
-        67.8373517200117 / m,
-        0.6382314100844745,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        0.07311876677744167,
+        [932597.8521311749, 2.828484891012489, 5.564766255374733e18],
+        [2.3754726025068047, 67.8373517200117, 0.6382314100844745],
+    );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
     assert!(!id.fit.intervals_valid(), "{:?}", id.fit.warning());
@@ -690,16 +692,11 @@ fn a_single_level_flat_in_eta_reaches_the_optimum_and_names_the_ridge() {
 #[test]
 fn a_noise_floor_fitted_to_the_low_amplitudes_does_not_flag_the_peaks() {
     let data = blind_set(include_str!("data/blind_h038_hardening.csv"));
-    let m = 2.315820315356214;
-    let truth = Parameters::from([
-        2238.1025676264094 / m,
-        0.563779266614056 / m,
-        22370.042109657945 / m,
-        2.79739395210785,
-        0.0,
-        0.0,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        2.315820315356214,
+        [2238.1025676264094, 0.563779266614056, 22370.042109657945],
+        [2.79739395210785, 0.0, 0.0],
+    );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
 }
@@ -716,16 +713,11 @@ fn a_noise_floor_fitted_to_the_low_amplitudes_does_not_flag_the_peaks() {
 #[test]
 fn a_damping_term_removed_in_a_wrong_basin_is_tried_again_along_its_exponent() {
     let data = blind_set(include_str!("data/blind_h000_mixed.csv"));
-    let m = 9.136545136669797;
-    let truth = Parameters::from([
-        28741.846378463797 / m,
-        1.6343895202915546 / m,
-        4504757488.302594 / m,
-        3.426069105528884,
-        2.50076863229789 / m,
-        0.5523968551668148,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        9.136545136669797,
+        [28741.846378463797, 1.6343895202915546, 4504757488.302594],
+        [3.426069105528884, 2.50076863229789, 0.5523968551668148],
+    );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
     assert!(id.fit.theta.kappa > 0.0, "{:?}", id.fit.theta);
@@ -736,16 +728,11 @@ fn a_damping_term_removed_in_a_wrong_basin_is_tried_again_along_its_exponent() {
 /// η = 1.24) and its truth (mass-normalised).
 fn blind_h013() -> (Dataset, Parameters) {
     let data = blind_set(include_str!("data/blind_h013_mixed.csv"));
-    let m = 97.39835864801628;
-    let truth = Parameters::from([
-        3938760.6748232045 / m,
-        61.01291873096872 / m,
-        1.712547736914544e17 / m,
-        4.704604063014635,
-        41.418214912737916 / m,
-        1.2426352980194202,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        97.39835864801628,
+        [3938760.6748232045, 61.01291873096872, 1.712547736914544e17],
+        [4.704604063014635, 41.418214912737916, 1.2426352980194202],
+    );
     (data, truth)
 }
 
@@ -809,16 +796,11 @@ fn an_exponent_profile_finds_the_basin_no_candidate_reached() {
 /// ρ = 5.43, no nonlinear damping) and its truth (mass-normalised).
 fn blind_h031() -> (Dataset, Parameters) {
     let data = blind_set(include_str!("data/blind_h031_hardening.csv"));
-    let m = 0.02066530084515362;
-    let truth = Parameters::from([
-        1178.1400536536416 / m,
-        0.015736389581954034 / m,
-        935439530939493.8 / m,
-        5.434594024455927,
-        0.0,
-        0.0,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        0.02066530084515362,
+        [1178.1400536536416, 0.015736389581954034, 935439530939493.8],
+        [5.434594024455927, 0.0, 0.0],
+    );
     (data, truth)
 }
 
@@ -876,16 +858,11 @@ fn a_power_law_stiffness_alone_finds_the_optimum_with_the_gain_held() {
 #[test]
 fn a_fold_pinned_at_a_measured_step_is_moved_into_its_cell() {
     let data = blind_set(include_str!("data/blind_h008_hardening.csv"));
-    let m = 38.541409525194645;
-    let truth = Parameters::from([
-        149792.94065675922 / m,
-        52.055476853796534 / m,
-        1154730223455.5867 / m,
-        3.8042661431729616,
-        0.0,
-        0.0,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        38.541409525194645,
+        [149792.94065675922, 52.055476853796534, 1154730223455.5867],
+        [3.8042661431729616, 0.0, 0.0],
+    );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
     // the fold of level 4's up-sweep is inside its step cell, not at a step
@@ -913,16 +890,11 @@ fn a_fold_pinned_at_a_measured_step_is_moved_into_its_cell() {
 #[test]
 fn landscape_rows_the_chain_collapsed_are_solved_cold() {
     let data = blind_set(include_str!("data/blind_h002_mixed.csv"));
-    let m = 0.09144455052795457;
-    let truth = Parameters::from([
-        156670.19308948045 / m,
-        0.6364599795444507 / m,
-        3.406744299389431e17 / m,
-        3.1446761608647855,
-        0.5231784648906079 / m,
-        0.41035792066712706,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        0.09144455052795457,
+        [156670.19308948045, 0.6364599795444507, 3.406744299389431e17],
+        [3.1446761608647855, 0.5231784648906079, 0.41035792066712706],
+    );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
     let land = &id.landscape;
@@ -974,16 +946,11 @@ fn an_exponent_held_at_zero_with_its_coefficient_free_is_refused() {
 #[test]
 fn a_crawl_beside_a_natural_bound_converges_with_the_bound_held() {
     let data = blind_set(include_str!("data/blind_h037_friction.csv"));
-    let m = 16.020598116319658;
-    let truth = Parameters::from([
-        936602.8233285932 / m,
-        14.95301896593451 / m,
-        719278983068.4012 / m,
-        2.8619136641205873,
-        2.8807696121868873 / m,
-        -1.0,
-        1.0,
-    ]);
+    let truth = physical_truth(
+        16.020598116319658,
+        [936602.8233285932, 14.95301896593451, 719278983068.4012],
+        [2.8619136641205873, 2.8807696121868873, -1.0],
+    );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
     assert!(

@@ -3501,7 +3501,7 @@ fn profile_exponents(
         // equivalent damping at the reference amplitude kept)
         if removed_term(setup, from, coef, exp) {
             for (k, &v) in axis.iter().enumerate().step_by(every) {
-                if coef == KAPPA && th[DELTA] > 0.0 {
+                if coef == KAPPA && from.spec.status[DELTA] == Status::Free && th[DELTA] > 0.0 {
                     let mut t = th;
                     t[KAPPA] = equivalent_at_reference(0.5 * th[DELTA], 0.0, v, r);
                     t[DELTA] = 0.5 * th[DELTA];

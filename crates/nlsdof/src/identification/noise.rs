@@ -97,11 +97,9 @@ pub fn local_noise_scaled(omegas: &[f64], residuals: &[f64], scale: &[f64]) -> V
     let mut e2 = vec![0.0; n];
     let mut mix = vec![0.0; n];
     for i in 1..n - 1 {
-        let (h1, h2) = (omegas[i] - omegas[i - 1], omegas[i + 1] - omegas[i]);
-        let wl = h2 / (h1 + h2);
-        let wr = h1 / (h1 + h2);
+        let (wl, wr) = pseudo_weights(omegas, i);
         let d = 1.0 + wl * wl + wr * wr;
-        let e = residuals[i] - wl * residuals[i - 1] - wr * residuals[i + 1];
+        let e = second_difference(residuals, i, (wl, wr));
         e2[i] = e * e / d;
         mix[i] = (scale[i].powi(2) + (wl * scale[i - 1]).powi(2) + (wr * scale[i + 1]).powi(2)) / d;
     }
@@ -153,6 +151,19 @@ pub fn local_noise_scaled(omegas: &[f64], residuals: &[f64], scale: &[f64]) -> V
     }
 }
 
+/// The weights `(w_l, w_r)` of the pseudo-residual at interior step `i`
+/// (module docs): the linear interpolation of its neighbours at `Ω_i`.
+fn pseudo_weights(omegas: &[f64], i: usize) -> (f64, f64) {
+    let (h1, h2) = (omegas[i] - omegas[i - 1], omegas[i + 1] - omegas[i]);
+    (h2 / (h1 + h2), h1 / (h1 + h2))
+}
+
+/// `r_i − w_l r_{i−1} − w_r r_{i+1}`: the pseudo-residual at interior step
+/// `i` before its normalisation.
+fn second_difference(r: &[f64], i: usize, (wl, wr): (f64, f64)) -> f64 {
+    r[i] - wl * r[i - 1] - wr * r[i + 1]
+}
+
 /// `Σ e_i²/V_i` and the number of terms over the interior steps `i` of one
 /// curve that `include` selects: the pseudo-residuals `e_i` of `residuals`
 /// (module docs) against the variance `V_i` the noise estimate `sigma`
@@ -172,9 +183,8 @@ pub fn pseudo_residual_chi2(
         if !include(i) {
             continue;
         }
-        let (h1, h2) = (omegas[i] - omegas[i - 1], omegas[i + 1] - omegas[i]);
-        let (wl, wr) = (h2 / (h1 + h2), h1 / (h1 + h2));
-        let e = residuals[i] - wl * residuals[i - 1] - wr * residuals[i + 1];
+        let (wl, wr) = pseudo_weights(omegas, i);
+        let e = second_difference(residuals, i, (wl, wr));
         let v = sigma[i].powi(2) + (wl * sigma[i - 1]).powi(2) + (wr * sigma[i + 1]).powi(2);
         if v > 0.0 && v.is_finite() && e.is_finite() {
             sum += e * e / v;

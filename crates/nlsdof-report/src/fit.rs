@@ -163,7 +163,7 @@ pub fn adequacy_json(id: &Identification) -> Value {
         }).collect::<Vec<_>>(),
         "message": id.adequacy_message(),
         "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL, "peaks_mean_z2": ADEQUACY_PEAKS,
-                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2; residual_over_noise and peak_residual_over_noise are sqrt(mean z^2)"},
+                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2 (there against the noise the peaks' own pseudo-residuals support, where they reject the estimate at their chi^2 0.1 % point); residual_over_noise and peak_residual_over_noise are sqrt(mean z^2)"},
         "escalation": a.escalation,
         "late_folds": a.late_folds.iter().map(|&(i, r)| {
             let c = &id.curves[i];

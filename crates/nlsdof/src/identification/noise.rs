@@ -101,7 +101,7 @@ pub fn local_noise_scaled(omegas: &[f64], residuals: &[f64], scale: &[f64]) -> V
         let d = 1.0 + wl * wl + wr * wr;
         let e = second_difference(residuals, i, (wl, wr));
         e2[i] = e * e / d;
-        mix[i] = (scale[i].powi(2) + (wl * scale[i - 1]).powi(2) + (wr * scale[i + 1]).powi(2)) / d;
+        mix[i] = mixed_square(scale, i, (wl, wr)) / d;
     }
     let (e2, mix) = (&e2[1..n - 1], &mix[1..n - 1]);
     let mut sorted_mix = mix.to_vec();
@@ -164,6 +164,13 @@ fn second_difference(r: &[f64], i: usize, (wl, wr): (f64, f64)) -> f64 {
     r[i] - wl * r[i - 1] - wr * r[i + 1]
 }
 
+/// `x_i² + (w_l x_{i−1})² + (w_r x_{i+1})²`: with per-step noise scales
+/// `x`, the variance of the pseudo-residual at interior step `i` before
+/// its normalisation, up to the scales' common factor.
+fn mixed_square(x: &[f64], i: usize, (wl, wr): (f64, f64)) -> f64 {
+    x[i].powi(2) + (wl * x[i - 1]).powi(2) + (wr * x[i + 1]).powi(2)
+}
+
 /// `Σ e_i²/V_i` and the number of terms over the interior steps `i` of one
 /// curve that `include` selects: the pseudo-residuals `e_i` of `residuals`
 /// (module docs) against the variance `V_i` the noise estimate `sigma`
@@ -185,7 +192,7 @@ pub fn pseudo_residual_chi2(
         }
         let (wl, wr) = pseudo_weights(omegas, i);
         let e = second_difference(residuals, i, (wl, wr));
-        let v = sigma[i].powi(2) + (wl * sigma[i - 1]).powi(2) + (wr * sigma[i + 1]).powi(2);
+        let v = mixed_square(sigma, i, (wl, wr));
         if v > 0.0 && v.is_finite() && e.is_finite() {
             sum += e * e / v;
             count += 1;

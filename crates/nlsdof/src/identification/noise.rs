@@ -37,9 +37,21 @@
 //! squared standardised values are capped at the χ²₁ 1 % point (started at
 //! the mean of the smallest 80 % divided by the mean of a χ²₁ variable below
 //! its 80 % point, 0.437 72; unbiased for Gaussian noise); the `b` of the
-//! largest capped likelihood over all steps is kept. The cap makes a few
-//! steps of misfit count as a bounded loss, and the mix keeps a peak one
-//! step wide from being read as noise. (A first
+//! largest capped likelihood over all steps is kept if it is significant:
+//! if it lowers the capped `−2 ln L` below that of `b = 0` by more than the
+//! χ²₁ 0.1 % point (10.83), else the noise is taken as purely relative. The
+//! cap makes a few steps of misfit count as a bounded loss, and the mix
+//! keeps a peak one step wide from being read as noise.
+//!
+//! Why the test: the cap also forgives a floor that makes the peak's noise
+//! too small, so with one free `b` the likelihood can prefer a nearly
+//! constant noise on weak evidence. Measured on a blind set (one level up,
+//! 120 steps, 1 % relative noise, no floor): the grid's largest floor won
+//! by 5.9, σ̂ at the peak was 0.36× the true noise, and a fit at 0.78× the
+//! truth's Eq 31 cost was flagged at 1.6× the noise. Under pure relative
+//! noise (4000 realisations on the profiles of 400 blind curves) the
+//! statistic exceeded 10.83 in 0.7 % of curves (the pseudo-residuals are
+//! correlated and capped, hence above the nominal 0.1 %), 3.84 in 7.8 %. (A first
 //! version estimated the scale in a window of 41 steps around each point;
 //! next to narrow peaks it underestimated the noise, and the χ² tests of
 //! [`super::identify`] then kept near-copies of the linear terms.)
@@ -55,6 +67,10 @@ use super::data::{Curve, Dataset};
 /// Points of the grid of the absolute floor `b` (0, then `10^-6 … 10^0.5`
 /// times the median of `s²`, in half decades).
 const FLOOR_GRID: usize = 14;
+
+/// The χ²₁ 0.1 % point: a floor `b > 0` is kept only when it lowers the
+/// capped `−2 ln L` of the pseudo-residuals by more than this (module docs).
+const FLOOR_LR: f64 = 10.828;
 
 /// Mean of a χ²₁ variable below its 80 % point: `E[Z² | Z² < 1.6424]`.
 const TRIMMED_CHI2: f64 = 0.437_72;
@@ -114,6 +130,7 @@ pub fn local_noise_scaled(omegas: &[f64], residuals: &[f64], scale: &[f64]) -> V
     // scale c for each from the trimmed mean, refined to the capped
     // likelihood's stationary point
     let mut best: Option<(f64, f64, f64)> = None;
+    let mut relative: Option<(f64, f64, f64)> = None;
     let mut x = vec![0.0; e2.len()];
     let m = e2.len() as f64;
     for k in 0..=FLOOR_GRID {
@@ -138,8 +155,17 @@ pub fn local_noise_scaled(omegas: &[f64], residuals: &[f64], scale: &[f64]) -> V
         let nll: f64 = (0..e2.len())
             .map(|i| (c * (mix[i] + b)).ln() + (x[i] / c).min(CAP))
             .sum();
+        if k == 0 {
+            relative = Some((nll, c, b));
+        }
         if best.map_or(true, |(v, _, _)| nll < v) {
             best = Some((nll, c, b));
+        }
+    }
+    // the floor is kept only where it is significant (module docs)
+    if let (Some(r), Some(f)) = (relative, best) {
+        if r.0 - f.0 <= FLOOR_LR {
+            best = Some(r);
         }
     }
     match best {
@@ -493,6 +519,71 @@ mod tests {
         assert!(
             (t2 / t - 4.0).abs() < 1e-9 && t2 > limit,
             "{t2} (limit {limit})"
+        );
+    }
+
+    /// Oracle: the added noise, with and without a floor, on a resonance
+    /// curve of 120 steps (ζ = 1 %, ν 0.8 … 1.25), 400 realisations each.
+    /// Relative noise of 1 %: the estimate at the peak is within a factor
+    /// 1.5 of the true σ in all but a few (measured: 3 of 400 outside; 19
+    /// without the floor's significance test, whose floors took the noise of
+    /// the low amplitudes up to the peak), and the adequacy statistic stays
+    /// below the identification's threshold of 2.25 in every one (largest
+    /// 1.86; 4.93 without the test). A floor of a tenth of the noise at the
+    /// peak (`σ² = 10⁻⁴ s² + (10⁻³ s_max)²`: three times the relative noise
+    /// at the lowest amplitude) is often not significant in 118
+    /// pseudo-residuals, yet the statistic stays below 2.25 in all but a few
+    /// (measured 1 of 400, as without the test). A floor of half the noise at
+    /// the peak (14 times the relative noise at the lowest amplitude) is
+    /// found: the estimate at the lowest amplitude within a factor 2 of the
+    /// true σ there in all but a few (measured 6 of 400 outside; 2 without
+    /// the test).
+    #[test]
+    fn a_floor_is_fitted_only_where_the_pseudo_residuals_need_it() {
+        let n = 120;
+        let om: Vec<f64> = (0..n).map(|i| 0.8 + 0.45 * i as f64 / n as f64).collect();
+        let a: Vec<f64> = om
+            .iter()
+            .map(|&nu| 1.0 / ((1.0 - nu * nu).powi(2) + (0.02 * nu).powi(2)).sqrt())
+            .collect();
+        let top = a.iter().fold(0.0f64, |m, &x| m.max(x));
+        let (ipk, imin) = (
+            (0..n).max_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap(),
+            (0..n).min_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap(),
+        );
+        let d = one_curve(a.clone());
+        let off = |s: f64, truth: f64| (s / truth).ln().abs() > 1.5f64.ln();
+        let (mut off_rel, mut z_rel, mut z_weak, mut off_strong) = (0, 0, 0, 0);
+        let mut largest = 0.0f64;
+        for seed in 0..400 {
+            let mut rng = Rng(1000 + seed);
+            let r: Vec<f64> = a.iter().map(|&x| 0.01 * x * rng.normal()).collect();
+            off_rel += usize::from(off(local_noise(&d.curves[0], &r)[ipk], 0.01 * a[ipk]));
+            let z = mean_z2(&d, &r);
+            largest = largest.max(z);
+            z_rel += usize::from(z > 2.25);
+            for (floor, strong) in [(1e-3, false), (5e-3, true)] {
+                let sd = |x: f64| (1e-4 * x * x + (floor * top).powi(2)).sqrt();
+                let r: Vec<f64> = a.iter().map(|&x| sd(x) * rng.normal()).collect();
+                if strong {
+                    let s = local_noise(&d.curves[0], &r);
+                    // (not found, the estimate there would be about 1/14 of it)
+                    off_strong += usize::from((s[imin] / sd(a[imin])).ln().abs() > 2f64.ln());
+                } else {
+                    z_weak += usize::from(mean_z2(&d, &r) > 2.25);
+                }
+            }
+        }
+        eprintln!("relative: {off_rel} off at the peak, {z_rel} above 2.25 (largest {largest:.2}); weak floor: {z_weak} above 2.25; strong floor: {off_strong} off at the lowest amplitude");
+        assert!(
+            off_rel <= 4,
+            "relative noise: {off_rel} of 400 off at the peak"
+        );
+        assert!(z_rel == 0, "relative noise: {z_rel} of 400 above 2.25");
+        assert!(z_weak <= 2, "weak floor: {z_weak} of 400 above 2.25");
+        assert!(
+            off_strong <= 8,
+            "strong floor: {off_strong} of 400 off at the lowest amplitude"
         );
     }
 }

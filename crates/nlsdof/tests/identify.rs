@@ -722,6 +722,27 @@ fn a_noise_floor_the_data_do_not_need_is_not_fitted() {
 }
 
 /// A blind in-family set (`../shared/tools/blind_suite.py`, seed
+/// 2711270212, case h003-mixed: three levels swept up and down, 200 steps,
+/// no phase, ρ = 2.46, η = 0.92). The fit ended in a neighbouring basin of
+/// η (0.41, δ a quarter of the truth's on a δ–κ ridge), within its noise
+/// (1.03×) at 1.065× the truth's Eq 31 cost: a miss without a flag. The
+/// gain test had freed the gain there (0.995, F = 64) to take up the
+/// misfit. A fit whose gain the decisions freed now gets the exponent
+/// profile, which also holds each exponent half a unit either side of the
+/// fit (the coarse values, 1.35 apart on η, stepped over this basin).
+#[test]
+fn a_freed_gain_sends_the_fit_to_the_exponent_profile() {
+    let data = blind_set(include_str!("data/blind_h003_mixed.csv"));
+    let truth = physical_truth(
+        0.10239173251517239,
+        [43.58053148748426, 0.037304709346788874, 17319.03119370524],
+        [2.455712812502284, 0.03108748269496654, 0.9230419731508293],
+    );
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert_trusted(&id);
+}
+
+/// A blind in-family set (`../shared/tools/blind_suite.py`, seed
 /// 2711270143, case h000-mixed: two levels swept up and down, 300 steps,
 /// no phase, ρ = 3.43, η = 0.55). The race ended at η = −1 (its natural
 /// bound), 4.9× the truth's objective; stage 5 removed the damping term

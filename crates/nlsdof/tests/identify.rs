@@ -665,8 +665,11 @@ fn a_single_level_is_searched_as_widely_as_a_misfit() {
 /// the default pipeline's objective is below the truth's), and for three
 /// sessions the fit ended elsewhere on that flat valley, 1.13–1.33× the
 /// truth's cost and within the noise: a miss without a flag. Found since the
-/// exponent profile also starts from the landscape (0.998×); the flat
-/// direction is named: δ and κ trade off along a ridge, intervals not valid.
+/// exponent profile also starts from the landscape (0.998×, η 0.35, δ and κ
+/// named as a ridge, intervals not valid); since the profile also holds η
+/// half a unit either side of the fit, lower still (Eq 31 3.235e-14 against
+/// 3.378e-14) at η 3.35, which is named as not determined by the data (its
+/// 95 % interval [−39.9, 46.6]). Either way the flat direction is named.
 #[test]
 fn a_single_level_flat_in_eta_reaches_the_optimum_and_names_the_ridge() {
     let data = blind_set(include_str!("data/blind_h027_mixed.csv"));
@@ -677,7 +680,17 @@ fn a_single_level_flat_in_eta_reaches_the_optimum_and_names_the_ridge() {
     );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
-    assert!(!id.fit.intervals_valid(), "{:?}", id.fit.warning());
+    let eta_undetermined = id.fit.uncertainty.as_ref().is_some_and(|u| {
+        nlsdof::identification::flags::undetermined_exponents(u)
+            .iter()
+            .any(|x| x.name == "eta")
+    });
+    assert!(
+        !id.fit.intervals_valid() || eta_undetermined,
+        "{:?} {:?}",
+        id.fit.warning(),
+        id.fit.notes()
+    );
 }
 
 /// A blind in-family set (`../shared/tools/blind_suite.py`, seed

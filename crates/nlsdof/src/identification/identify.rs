@@ -463,12 +463,7 @@ pub struct ExponentStart {
 /// that axis at the other's node. `None` if neither is given or the
 /// landscape has no solved node there.
 pub fn nearest_node(land: &Landscape, start: &ExponentStart) -> Option<(usize, usize)> {
-    let nearest = |axis: &[f64], v: f64| -> Option<usize> {
-        if !v.is_finite() {
-            return None;
-        }
-        (0..axis.len()).min_by(|&a, &b| (axis[a] - v).abs().total_cmp(&(axis[b] - v).abs()))
-    };
+    let nearest = nearest_index;
     let (i, j) = match (start.rho, start.eta) {
         (None, None) => return None,
         (Some(r), Some(e)) => (nearest(&land.rho, r)?, nearest(&land.eta, e)?),
@@ -3450,12 +3445,19 @@ pub const PROFILE_VALUES: usize = 8;
 /// truth's cost instead of 1.003×).
 pub const PROFILE_LOCAL: f64 = 0.5;
 
-/// The index of the axis value nearest `v`.
-fn nearest_index(axis: &[f64], v: f64) -> usize {
-    (0..axis.len())
-        .min_by(|&i, &j| (axis[i] - v).abs().total_cmp(&(axis[j] - v).abs()))
-        .unwrap_or(0)
+/// The index of the axis value nearest `v` (`None` for an empty axis or a
+/// `v` that is not finite).
+fn nearest_index(axis: &[f64], v: f64) -> Option<usize> {
+    if !v.is_finite() {
+        return None;
+    }
+    (0..axis.len()).min_by(|&a, &b| (axis[a] - v).abs().total_cmp(&(axis[b] - v).abs()))
 }
+
+/// Held fits of [`profile_exponents`] freed again: the best across the
+/// axis, and the best near the fit ([`PROFILE_LOCAL`]).
+const PROFILE_FREED_ACROSS: usize = 2;
+const PROFILE_FREED_NEAR: usize = 1;
 
 /// The escalation's exponent profile runs when the fit's residual over all
 /// points is at most this many times the noise ([`Adequacy::ratio`]). A fit
@@ -3558,13 +3560,17 @@ fn profile_exponents(
         // the axis in PROFILE_VALUES steps, and half a unit either side of
         // the fit (a neighbouring basin the coarse values step over)
         let (lo, hi) = (axis[0], axis[axis.len() - 1]);
-        let coarse = axis.iter().copied().enumerate().step_by(every);
+        let coarse = axis
+            .iter()
+            .copied()
+            .enumerate()
+            .step_by(every)
+            .map(|(k, v)| (k, v, false));
         let local = [th[exp] - PROFILE_LOCAL, th[exp] + PROFILE_LOCAL]
             .into_iter()
             .filter(|v| *v >= lo && *v <= hi)
-            .map(|v| (nearest_index(axis, v), v));
-        let coarse = coarse.map(|(k, v)| (k, v, false));
-        for (k, v, near) in coarse.chain(local.map(|(k, v)| (k, v, true))) {
+            .filter_map(|v| Some((nearest_index(axis, v)?, v, true)));
+        for (k, v, near) in coarse.chain(local) {
             if (v - th[exp]).abs() < 0.25 {
                 continue;
             }
@@ -3586,7 +3592,7 @@ fn profile_exponents(
     }
     let held = jobs.len();
     let near_jobs = jobs.iter().filter(|j| j.1).count();
-    let to_free = (held - near_jobs).min(2) + near_jobs.min(1);
+    let to_free = (held - near_jobs).min(PROFILE_FREED_ACROSS) + near_jobs.min(PROFILE_FREED_NEAR);
     progress(IdentifyProgress::Stage {
         name: "escalation: exponents held",
         steps: held + to_free,
@@ -3605,8 +3611,8 @@ fn profile_exponents(
     let (near, across): (Vec<_>, Vec<_>) = fits.into_iter().partition(|f| f.1);
     let fits: Vec<Fitted> = across
         .into_iter()
-        .take(2)
-        .chain(near.into_iter().take(1))
+        .take(PROFILE_FREED_ACROSS)
+        .chain(near.into_iter().take(PROFILE_FREED_NEAR))
         .map(|f| f.0)
         .collect();
     let freed: Vec<Fitted> = fits

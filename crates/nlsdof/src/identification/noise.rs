@@ -433,6 +433,17 @@ mod tests {
         }
     }
 
+    /// `n` normalised frequencies from `nu0` over `span`, and the linear
+    /// resonance amplitude `1/√((1 − ν²)² + (2ζν)²)` there (`two_zeta` = 2ζ).
+    fn resonance(n: usize, nu0: f64, span: f64, two_zeta: f64) -> (Vec<f64>, Vec<f64>) {
+        let nu: Vec<f64> = (0..n).map(|i| nu0 + span * i as f64 / n as f64).collect();
+        let a = nu
+            .iter()
+            .map(|&nu| 1.0 / ((1.0 - nu * nu).powi(2) + (two_zeta * nu).powi(2)).sqrt())
+            .collect();
+        (nu, a)
+    }
+
     fn mean_z2(d: &Dataset, r: &[f64]) -> f64 {
         let noise = noise_model(d, r, false);
         let (z2, n) = z2_per_curve(d, r, false, &[], &noise)[0];
@@ -447,13 +458,7 @@ mod tests {
     /// branch (70 % off) dominates its curve.
     #[test]
     fn the_noise_of_the_residuals_is_the_added_noise() {
-        let n = 400;
-        let a: Vec<f64> = (0..n)
-            .map(|i| {
-                let nu = 0.9 + 0.2 * i as f64 / n as f64;
-                1.0 / ((1.0 - nu * nu).powi(2) + (0.004 * nu).powi(2)).sqrt()
-            })
-            .collect();
+        let (_, a) = resonance(400, 0.9, 0.2, 0.004);
         let mut rng = Rng(3);
         let noise: Vec<f64> = a.iter().map(|&x| 0.01 * x * rng.normal()).collect();
         let d = one_curve(a.clone());
@@ -491,12 +496,7 @@ mod tests {
     /// it is four times as large, beyond that point.
     #[test]
     fn the_peaks_pseudo_residuals_test_the_noise_there() {
-        let n = 400;
-        let om: Vec<f64> = (0..n).map(|i| 0.9 + 0.2 * i as f64 / n as f64).collect();
-        let a: Vec<f64> = om
-            .iter()
-            .map(|&nu| 1.0 / ((1.0 - nu * nu).powi(2) + (0.004 * nu).powi(2)).sqrt())
-            .collect();
+        let (om, a) = resonance(400, 0.9, 0.2, 0.004);
         let top = a.iter().fold(0.0f64, |m, &x| m.max(x));
         let mut rng = Rng(7);
         let r: Vec<f64> = a
@@ -541,11 +541,7 @@ mod tests {
     #[test]
     fn a_floor_is_fitted_only_where_the_pseudo_residuals_need_it() {
         let n = 120;
-        let om: Vec<f64> = (0..n).map(|i| 0.8 + 0.45 * i as f64 / n as f64).collect();
-        let a: Vec<f64> = om
-            .iter()
-            .map(|&nu| 1.0 / ((1.0 - nu * nu).powi(2) + (0.02 * nu).powi(2)).sqrt())
-            .collect();
+        let (_, a) = resonance(n, 0.8, 0.45, 0.02);
         let top = a.iter().fold(0.0f64, |m, &x| m.max(x));
         let (ipk, imin) = (
             (0..n).max_by(|&i, &j| a[i].total_cmp(&a[j])).unwrap(),

@@ -411,7 +411,7 @@ pub fn identification_json(id: &Identification) -> Value {
             "note": "the equation-error test (biased by errors in variables) only chooses the starts; the output-error F test decides: freed when F > 10.83"})),
         "jump_weight": id.jump_weight,
         "candidates": id.candidates.iter().map(|c| json!({
-            "rho": c.rho, "eta": c.eta, "ee_cost": c.ee_cost, "sign": c.sign.name(),
+            "rho": c.rho, "eta": c.eta, "ee_cost": c.ee_cost, "sign": c.sign.name(), "gain_held": c.gain,
             "objective": c.oe.as_ref().ok(), "error": c.oe.as_ref().err()})).collect::<Vec<_>>(),
     })
 }
@@ -420,9 +420,16 @@ pub fn identification_json(id: &Identification) -> Value {
 pub fn identification_text(id: &Identification) -> String {
     let mut s = String::new();
     let l = &id.landscape;
+    // (the screen freed the gain: the nodes raced with it free and held)
+    let held = id.candidates.iter().filter(|c| c.gain.is_some()).count();
+    let both = if held > 0 && held < id.candidates.len() {
+        format!(" ({held} of them with the gain held at 1, beside the free-gain race)")
+    } else {
+        String::new()
+    };
     writeln!(
         s,
-        "stages: equation error ({}) -> landscape {}x{} (rho {:.3}..{:.3}, eta {:.3}..{:.3}), {} grid minima -> output error from the best {}",
+        "stages: equation error ({}) -> landscape {}x{} (rho {:.3}..{:.3}, eta {:.3}..{:.3}), {} grid minima -> output error from the best {}{both}",
         if l.with_phase { "amplitude and phase" } else { "amplitude" },
         l.rho.len(),
         l.eta.len(),

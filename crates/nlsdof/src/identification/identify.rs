@@ -646,6 +646,11 @@ pub struct Candidate {
     pub sign: Sign,
     /// Objective minimised by output error (incl. jump/phase terms), or the error.
     pub oe: Result<f64, String>,
+    /// The forcing gain this candidate was fitted with held (`None`: free).
+    /// When the equation-error screen frees the gain, each node is raced
+    /// with it free and held at 1, and appears once for each.
+    #[serde(default)]
+    pub gain: Option<f64>,
 }
 
 /// Progress of [`identify`], for a progress bar: each stage announces
@@ -1943,6 +1948,10 @@ fn race(
                 ee_cost: land.at(i, j),
                 sign,
                 oe,
+                gain: match gain_status {
+                    Status::Fixed(g) => Some(g),
+                    _ => None,
+                },
             };
             let kept = res.ok().map(|r| Fitted {
                 phase_shift: shift,

@@ -1276,7 +1276,7 @@ fn stages(
             ));
             if p.objective < here.objective * (1.0 - 1e-6) {
                 let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
-                finish_and_adopt_if_lower(&setup, p, (&fit_data, &refine_data), result, progress)?;
+                finish_and_adopt_if_better(&setup, p, (&fit_data, &refine_data), result, progress)?;
             }
         }
     }
@@ -1878,9 +1878,9 @@ fn race(
     // A node whose own detected phase offset the output error cannot reach
     // from the stages' reads the phases with it (`node_phase_shift`): its
     // equation error (with the gain held) and its fit see the data shifted.
-    let shift_at = |ee: &EquationErrorFit| node_phase_shift(setup, ex.phase_conv, ee.phase);
-    let with_gain_decided = |i: usize, j: usize, ee: &EquationErrorFit| -> EquationErrorFit {
-        let conv = if shift_at(ee) != 0.0 {
+    // (`shift`: the node's, from `node_phase_shift`)
+    let with_gain_decided = |i: usize, j: usize, ee: &EquationErrorFit, shift: f64| {
+        let conv = if shift != 0.0 {
             ee.phase
         } else {
             ex.phase_conv
@@ -1899,8 +1899,10 @@ fn race(
     let jobs: Vec<(usize, usize, EquationErrorFit, Sign, bool, f64)> = nodes
         .iter()
         .filter_map(|&(i, j)| {
-            land.fit_at(i, j)
-                .map(|ee| (i, j, with_gain_decided(i, j, ee), shift_at(ee)))
+            land.fit_at(i, j).map(|ee| {
+                let shift = node_phase_shift(setup, ex.phase_conv, ee.phase);
+                (i, j, with_gain_decided(i, j, ee, shift), shift)
+            })
         })
         .flat_map(|(i, j, ee, shift)| {
             signs(&ee)
@@ -2173,7 +2175,7 @@ fn finish(
 
 /// `alt` carried through the decisions and every point on the data as it
 /// read them ([`Fitted::phase_shift`]) and kept as
-/// [`finish_and_adopt_if_lower`] decides; its reading of the phases then
+/// [`finish_and_adopt_if_better`] decides; its reading of the phases then
 /// becomes the stages' (`datas`: their data and convention).
 #[allow(clippy::type_complexity)]
 fn finish_alternative(
@@ -2189,14 +2191,14 @@ fn finish_alternative(
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<(), IdentifyError> {
     if alt.phase_shift == 0.0 {
-        finish_and_adopt_if_lower(setup, alt, (fit_data, refine_data), result, progress)?;
+        finish_and_adopt_if_better(setup, alt, (fit_data, refine_data), result, progress)?;
         return Ok(());
     }
     let (mut alt_fit, mut alt_refine, mut alt_conv) =
         (fit_data.clone(), refine_data.clone(), *conv);
     adopt_phase_shift(&mut alt, &mut alt_conv, [&mut alt_fit, &mut alt_refine]);
     let datas = (&alt_fit, &alt_refine);
-    if finish_and_adopt_if_lower(setup, alt, datas, result, progress)? {
+    if finish_and_adopt_if_better(setup, alt, datas, result, progress)? {
         (*fit_data, *refine_data, *conv) = (alt_fit, alt_refine, alt_conv);
     }
     Ok(())
@@ -2212,7 +2214,7 @@ fn finish_alternative(
 /// late by a fraction of a step the measured-branch objective can sit
 /// below the truth's at many times its Eq 31 cost, and only the self-check
 /// sees it (`late_folds`). Returns whether it replaced the result.
-fn finish_and_adopt_if_lower(
+fn finish_and_adopt_if_better(
     setup: &Setup,
     alt: Fitted,
     (fit_data, refine_data): (&Dataset, &Dataset),

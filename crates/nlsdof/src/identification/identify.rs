@@ -111,8 +111,8 @@
 //!    free gain can take up the misfit of a neighbouring basin), gets the
 //!    exponent profile from the decided fit (its miss would be silent; a
 //!    single level a second time), and so does a fit still within
-//!    [`PROFILE_MAX_RATIO`] of its noise after an escalation that did not
-//!    profile (its race winner was further). A fit within its noise with a fold
+//!    [`PROFILE_MAX_RATIO`] of its noise after the escalation (which
+//!    profiled the race's winner, not the fit it ended at). A fit within its noise with a fold
 //!    pinned against a measured step has it moved into its step cell and
 //!    refitted (`unpin_folds`), kept when lower and still within the noise.
 //! 9. **Jump readings** (`decide_readings`, [`ReadingChoice::Auto`], only
@@ -1230,16 +1230,13 @@ fn stages(
     // η 1.7, whose race ended at η 0.04 and 2.11x the truth's Eq 31 cost
     // with a residual 1.23x the noise; the escalation reaches 0.97x).
     let single_level = fit_data.levels().len() == 1;
-    // (whether the escalation profiled the exponents)
-    let mut profiled_race_winner = false;
     if (!adequacy.adequate || single_level) && plan.escalate {
-        profiled_race_winner = adequacy.ratio <= PROFILE_MAX_RATIO;
         let (alt, tried, more) = escalate(
             &setup,
             &ex,
             &refine_data,
             gain_status,
-            (&race_winner, profiled_race_winner),
+            (&race_winner, adequacy.ratio <= PROFILE_MAX_RATIO),
             &raced,
             progress,
         )?;
@@ -1271,17 +1268,18 @@ fn stages(
     // ρ 2.37, η 0.99 was 1.52× the truth's Eq 31 cost within its noise
     // (1.39×); held at ρ 1.87 from there it reaches 0.962×). And so does a
     // fit that does not fit its noise but is within `PROFILE_MAX_RATIO` of
-    // it after the escalation, whose race winner was too far from it for
-    // the escalation to profile (measured: blind h002-mixed of seed
-    // 2711270143, two levels up, no phase, ρ 2.01, η 3.00: the escalation's
-    // candidates and multistart ended at η 6.14, 1.99× the noise and 1.88×
-    // the truth's Eq 31 cost, flagged; held at the truth's η the same
-    // pipeline reaches 0.978×).
+    // it after the escalation, which profiled the race's winner only if
+    // that was as near, not the fit it ended at (measured: blind h002-mixed
+    // of seed 2711270143, two levels up, no phase, ρ 2.01, η 3.00: the race
+    // winner too far to profile, the escalation's candidates and multistart
+    // ended at η 6.14, 1.99× the noise and 1.88× the truth's Eq 31 cost,
+    // flagged, now 0.980×; h036-mixed of 2711270407, two levels up and down,
+    // ρ 1.23, η 3.66: profiled from the race winner, ended at η 7.5 with a
+    // sweep read as censored, flagged at 118×, now 0.989×).
     let gain_freed = gain_test.as_ref().is_some_and(|t| t.freed);
     let near_top = adequacy.adequate && (adequacy.ratio > PROFILE_NEAR_NOISE || gain_freed);
-    let unprofiled =
-        !adequacy.adequate && !profiled_race_winner && adequacy.ratio <= PROFILE_MAX_RATIO;
-    if plan.escalate && (near_top || unprofiled) {
+    let misfit_near_noise = !adequacy.adequate && adequacy.ratio <= PROFILE_MAX_RATIO;
+    if plan.escalate && (near_top || misfit_near_noise) {
         let start = restarted(&best.spec, &best.fit.theta);
         let spec = carry_readings(&start, &fit_data, &refine_data);
         // (a fit the race's data cannot assess is left as it is)

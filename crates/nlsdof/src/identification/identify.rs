@@ -1288,9 +1288,16 @@ fn stages(
             profile_exponents(&setup, &ex, &refine_data, here, progress).map(|p| (here, p))
         });
         if let Some((here, (p, held))) = profiled {
-            adequacy.escalation.push(format!(
-                "{held} fits with an exponent held across its range"
-            ));
+            // (a second profile, after the escalation's, says where from)
+            let again = adequacy
+                .escalation
+                .iter()
+                .any(|t| t.contains("exponent held"));
+            adequacy.escalation.push(if again {
+                format!("{held} more with an exponent held, from the fit the escalation ended at")
+            } else {
+                format!("{held} fits with an exponent held across its range")
+            });
             if p.objective < here.objective * (1.0 - 1e-6) {
                 let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
                 finish_and_adopt_if_better(&setup, p, (&fit_data, &refine_data), result, progress)?;

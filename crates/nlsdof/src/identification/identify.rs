@@ -3025,8 +3025,8 @@ fn fold_gradient(
 /// tolerance of its target, `(ci, target, tolerance)`, all at once, by the
 /// least change in `u` that moves them so to first order (`du = Gᵀ(GGᵀ)⁻¹Δ`,
 /// `G` the rows `∂Ω_f/∂u` of the listed folds), Newton-iterated; `None`
-/// when a listed fold vanishes, the rows are dependent, or eight steps do
-/// not place them. [`reassign_jumps`] holds every other fold in its step
+/// when a listed fold vanishes, there are more folds than free parameters,
+/// the rows are dependent, or eight steps do not place them. [`reassign_jumps`] holds every other fold in its step
 /// cell so: the move of one fold by itself shifts every curve's fold, and
 /// a fold pushed out of its measured jump interval is piecewise constant
 /// there, so the refit cannot bring it back (measured: blind h001-hardening

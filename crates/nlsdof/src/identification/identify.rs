@@ -1017,6 +1017,15 @@ impl Fitted {
         Ok(out)
     }
 
+    /// `self` as a fit made on the stages' data shifted by `shift`
+    /// ([`Fitted::phase_shift`]).
+    fn read_shifted(self, shift: f64) -> Self {
+        Self {
+            phase_shift: shift,
+            ..self
+        }
+    }
+
     /// `spec` fitted on `data` with `opts` (no progress reports); `None`
     /// when the fit fails.
     fn fitted(data: &Dataset, spec: FitSpec, opts: &FitOptions) -> Option<Self> {
@@ -1645,16 +1654,22 @@ fn shift_phases(data: &mut Dataset, shift: f64) {
 
 /// The phase shift of `f` ([`Fitted::phase_shift`]) made the stages':
 /// their data (`datas`) shifted by it and their convention `conv` changed
-/// to match, so that `f`'s data are theirs (its shift then 0).
+/// to match ([`reread_phases`]), so that `f`'s data are theirs (its shift
+/// then 0).
 fn adopt_phase_shift(f: &mut Fitted, conv: &mut Option<PhaseConvention>, datas: [&mut Dataset; 2]) {
     let shift = std::mem::take(&mut f.phase_shift);
-    if shift == 0.0 {
-        return;
+    if shift != 0.0 {
+        reread_phases(datas, conv.as_mut(), shift);
     }
+}
+
+/// Every measured phase lag of `datas` shifted by `shift` rad, and the
+/// convention they were read with changed to match.
+fn reread_phases(datas: [&mut Dataset; 2], conv: Option<&mut PhaseConvention>, shift: f64) {
     for d in datas {
         shift_phases(d, shift);
     }
-    if let Some(c) = conv.as_mut() {
+    if let Some(c) = conv {
         // lag = s (ψ − c − Ωτ): adding `shift` to every lag is c → c − s·shift
         c.offset = wrap(c.offset - c.sign * shift);
     }
@@ -1789,11 +1804,7 @@ fn bake_phase_offset(
     // residual k (φ_model − ψ): the offset to add to every measured lag
     let delta = super::output_error::phase_offset(fit_data, &e.residuals, wp, &e.model);
     if delta.is_finite() {
-        for d in [&mut *fit_data, &mut *refine_data] {
-            shift_phases(d, delta);
-        }
-        // lag = s (ψ − c − Ωτ): adding δ to every lag is c → c − s δ
-        conv.offset = wrap(conv.offset - conv.sign * delta);
+        reread_phases([&mut *fit_data, &mut *refine_data], Some(&mut *conv), delta);
     }
     best.spec.profile_phase_offset = false;
     Ok(best)
@@ -1979,10 +1990,9 @@ fn race(
                     _ => None,
                 },
             };
-            let kept = res.ok().map(|r| Fitted {
-                phase_shift: shift,
-                ..Fitted::from_result(r, spec)
-            });
+            let kept = res
+                .ok()
+                .map(|r| Fitted::from_result(r, spec).read_shifted(shift));
             Ok(Some((cand, kept)))
         })
         .collect();
@@ -2052,10 +2062,7 @@ fn race(
                     &step,
                 )
                 .ok()
-                .map(|r| Fitted {
-                    phase_shift: shift,
-                    ..Fitted::from_result(r, spec2)
-                })
+                .map(|r| Fitted::from_result(r, spec2).read_shifted(shift))
             })
             .collect();
         for (&k, c) in stopped.iter().zip(continued) {
@@ -2086,10 +2093,7 @@ fn race(
                 })
                 .flatten()
                 .filter(|g| g.objective < f.objective)
-                .map(|g| Fitted {
-                    phase_shift: f.phase_shift,
-                    ..g
-                })
+                .map(|g| g.read_shifted(f.phase_shift))
         })
         .collect();
     for (f, r) in finalists.iter_mut().zip(relocated) {
@@ -3026,8 +3030,9 @@ fn fold_gradient(
 /// least change in `u` that moves them so to first order (`du = Gᵀ(GGᵀ)⁻¹Δ`,
 /// `G` the rows `∂Ω_f/∂u` of the listed folds), Newton-iterated; `None`
 /// when a listed fold vanishes, there are more folds than free parameters,
-/// the rows are dependent, or eight steps do not place them. [`reassign_jumps`] holds every other fold in its step
-/// cell so: the move of one fold by itself shifts every curve's fold, and
+/// the rows are dependent, or eight steps do not place them.
+/// [`reassign_jumps`] holds every other fold in its step cell so: the move
+/// of one fold by itself shifts every curve's fold, and
 /// a fold pushed out of its measured jump interval is piecewise constant
 /// there, so the refit cannot bring it back (measured: blind h001-hardening
 /// of seed 2711270322, six levels up, ρ 3.94: the top level's fold moved a
@@ -3043,13 +3048,12 @@ fn move_folds_jointly(
     let k = targets.len();
     let problem = Problem::new(work, &f.spec)?;
     let (ulo, uhi) = problem.u_bounds();
+    if k == 0 || k > ulo.len() {
+        return Ok(None);
+    }
     let mut th = f.fit.theta;
     for _ in 0..8 {
         let cols = problem.dtheta_du(&th);
-        let n = cols.len();
-        if k == 0 || k > n {
-            return Ok(None);
-        }
         let (mut rows, mut miss) = (Vec::with_capacity(k), Vec::with_capacity(k));
         let mut placed = true;
         for &(ci, target, tolerance) in targets {
@@ -3768,10 +3772,7 @@ fn escalate(
     for from in [first.clone(), start.clone()] {
         let data = phases_shifted(refine_data, from.phase_shift);
         let moved = reassign_jumps(setup, &from, &data, plan.lm.max_iterations)?;
-        if let Some(r) = moved.map(|r| Fitted {
-            phase_shift: from.phase_shift,
-            ..r
-        }) {
+        if let Some(r) = moved.map(|r| r.read_shifted(from.phase_shift)) {
             if !tried.iter().any(|t| t.starts_with("folds moved")) {
                 tried.push("folds moved past the points still on their branch".into());
             }
@@ -3798,10 +3799,7 @@ fn escalate(
         None,
         &step,
     ) {
-        let m = Fitted {
-            phase_shift: shift,
-            ..Fitted::from_result(r, spec)
-        };
+        let m = Fitted::from_result(r, spec).read_shifted(shift);
         if m.objective < start.objective {
             start = m;
         }
@@ -3813,15 +3811,7 @@ fn escalate(
             profile_exponents(setup, ex, &data, &start, progress)
         })
         .flatten()
-        .map(|(p, held)| {
-            (
-                Fitted {
-                    phase_shift: shift,
-                    ..p
-                },
-                held,
-            )
-        });
+        .map(|(p, held)| (p.read_shifted(shift), held));
     if let Some((p, held)) = profiled {
         tried.push(format!(
             "{held} fits with an exponent held across its range"

@@ -323,7 +323,8 @@ the terms that do not matter decided by the objective's noise-scaled drop -> the
 all points (data of at most 50,000 points; a 1500-point subsample before) -> SELF-CHECK: each \
 curve's residual against its noise, estimated from the data; a fit well above it, or any fit of a \
 single forcing level, escalates (more candidates, both signs, folds moved, a multistart of 16, each \
-exponent held across its range) and, if it still does not fit, says so on \
+exponent held across its range; a fit within its noise whose fold ends pinned at a measured step \
+holds each exponent half a unit either side) and, if it still does not fit, says so on \
 the first line (\"the model does not fit levels ...: residual N x the noise\") and in JSON under \
 \"adequacy\". A fit whose measured sweep leaves the model's branch a step or more before the model's \
 fold (read exactly) does not fit either: the model's own sweep does not follow the data there. Details: docs/identification.md.\n\n\

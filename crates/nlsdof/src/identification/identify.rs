@@ -1302,8 +1302,14 @@ fn stages(
     // against 3.37e-4.)
     // (data fitted on every point: a subsample's fit is judged, not refined,
     // on all points)
-    if adequacy.adequate && fit_data.len() <= POLISH_MAX_POINTS {
-        let un = unpin_folds(&setup, best.clone(), &fit_data)?;
+    // (a fit with no fold pinned is left as it is, and is not looked at again)
+    let pinned = if adequacy.adequate && fit_data.len() <= POLISH_MAX_POINTS {
+        pinned_folds(&fit_data, &best)?
+    } else {
+        Vec::new()
+    };
+    if !pinned.is_empty() {
+        let un = unpin_folds(&setup, best.clone(), &fit_data, &pinned)?;
         if un.fit.cost < best.fit.cost {
             let un = keep_folds_off_steps(un, &fit_data)?;
             let judged = judge(&fit_data, &un);
@@ -3329,8 +3335,9 @@ fn refit_behind_barrier(
 /// Share of a step cell within which a fold counts as pinned at its edge.
 const PINNED: f64 = 0.01;
 
-/// Folds that end pinned against a measured step (within [`PINNED`] of the
-/// cell's width, curves read exactly) moved to the middle of their cell
+/// Folds that end pinned against a measured step (`pinned`, by
+/// [`pinned_folds`]: within [`PINNED`] of the cell's width, curves read
+/// exactly) moved to the middle of their cell
 /// and refitted behind the barrier ([`refit_behind_barrier`]). A fold at
 /// the edge of its cell is a constrained optimum: the fit wants it across
 /// the step, where that point would change branch, and the sqrt-singular
@@ -3340,10 +3347,15 @@ const PINNED: f64 = 0.01;
 /// 1.3e-7 Hz above the last measured step on its branch, converged and
 /// within the noise at 1.071x the truth's Eq 31 cost; moved into its cell
 /// and refitted, 0.995x).
-fn unpin_folds(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted, IdentifyError> {
+fn unpin_folds(
+    setup: &Setup,
+    best: Fitted,
+    work: &Dataset,
+    pinned: &[(usize, usize)],
+) -> Result<Fitted, IdentifyError> {
     let mut moved = best.clone();
     let mut any = false;
-    for (ci, k) in pinned_folds(work, &best)? {
+    for &(ci, k) in pinned {
         any |= move_fold_between(work, &mut moved, ci, (k - 1, k), true)?
             || move_fold_between(work, &mut moved, ci, (k - 1, k), false)?;
     }

@@ -1413,6 +1413,15 @@ fn stages(
     })
 }
 
+/// The standing result of the stages, which an alternative may replace:
+/// the fit, its per-curve reports, its adequacy and its gain test.
+type Standing<'a> = (
+    &'a mut Fitted,
+    &'a mut Vec<CurveReport>,
+    &'a mut Adequacy,
+    &'a mut Option<GainTest>,
+);
+
 /// The exponent profile ([`profile_exponents`]) from the decided fit `best`
 /// on the race's data (`refine_data`), with the fit's readings carried
 /// there; a profiled fit with a lower objective there goes through the
@@ -1423,12 +1432,7 @@ fn profile_decided(
     setup: &Setup,
     ex: &Exploration,
     (fit_data, refine_data): (&Dataset, &Dataset),
-    (best, curves, adequacy, gain_test): (
-        &mut Fitted,
-        &mut Vec<CurveReport>,
-        &mut Adequacy,
-        &mut Option<GainTest>,
-    ),
+    (best, curves, adequacy, gain_test): Standing<'_>,
     scope: ProfileScope,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<(), IdentifyError> {
@@ -2260,17 +2264,11 @@ fn finish(
 /// read them ([`Fitted::phase_shift`]) and kept as
 /// [`finish_and_adopt_if_better`] decides; its reading of the phases then
 /// becomes the stages' (`datas`: their data and convention).
-#[allow(clippy::type_complexity)]
 fn finish_alternative(
     setup: &Setup,
     mut alt: Fitted,
     (fit_data, refine_data, conv): (&mut Dataset, &mut Dataset, &mut Option<PhaseConvention>),
-    result: (
-        &mut Fitted,
-        &mut Vec<CurveReport>,
-        &mut Adequacy,
-        &mut Option<GainTest>,
-    ),
+    result: Standing<'_>,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<(), IdentifyError> {
     if alt.phase_shift == 0.0 {
@@ -2331,12 +2329,7 @@ fn finish_and_adopt_if_better(
     setup: &Setup,
     alt: Fitted,
     (fit_data, refine_data): (&Dataset, &Dataset),
-    (best, curves, adequacy, gain_test): (
-        &mut Fitted,
-        &mut Vec<CurveReport>,
-        &mut Adequacy,
-        &mut Option<GainTest>,
-    ),
+    (best, curves, adequacy, gain_test): Standing<'_>,
     lower: Lower,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<bool, IdentifyError> {

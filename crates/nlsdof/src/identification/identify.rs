@@ -114,7 +114,11 @@
 //!    [`PROFILE_MAX_RATIO`] of its noise after the escalation (which
 //!    profiled the race's winner, not the fit it ended at). A fit within its noise with a fold
 //!    pinned against a measured step has it moved into its step cell and
-//!    refitted (`unpin_folds`), kept when lower and still within the noise.
+//!    refitted (`unpin_folds`), kept when lower and still within the noise;
+//!    a fold still pinned after that (a constrained optimum) has each
+//!    exponent held half a unit either side (`profile_decided`,
+//!    `ProfileScope::Near`), a lower fit kept only when significantly
+//!    lower (`significantly_lower`).
 //! 9. **Jump readings** (`decide_readings`, [`ReadingChoice::Auto`], only
 //!    when the fit still does not fit its noise after the escalation): a
 //!    stepped sine can leave its branch before the fold, never after. The
@@ -1310,11 +1314,13 @@ fn stages(
     };
     if !pinned.is_empty() {
         let un = unpin_folds(&setup, best.clone(), &fit_data, &pinned)?;
+        let mut still_pinned = true;
         if un.fit.cost < best.fit.cost {
             let un = keep_folds_off_steps(un, &fit_data)?;
             let judged = judge(&fit_data, &un);
             if judged.1.adequate {
                 adopt((&mut best, &mut curves, &mut adequacy), un, judged);
+                still_pinned = !pinned_folds(&fit_data, &best)?.is_empty();
             }
         }
         // A fold still pinned against a measured step after that is a
@@ -1326,8 +1332,9 @@ fn stages(
         // unpin refit, 1.006x the noise and 1.055x the truth's Eq 31 cost,
         // now 0.995x; h012-mixed of 2711270322, four levels up and down,
         // rho 5.07, eta 1.13: level 3's up-sweep fold on a step, 1.012x the
-        // noise, 1.10x, now 0.996x).
-        if plan.escalate && !profile_now && adequacy.adequate && pinned_fold(&fit_data, &best)? {
+        // noise, 1.10x, now 0.996x). (The fit is adequate here: the unpin
+        // refit is adopted only so.)
+        if plan.escalate && !profile_now && still_pinned {
             let datas = (&fit_data, &refine_data);
             let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
             profile_decided(&setup, &ex, datas, result, ProfileScope::Near, progress)?;
@@ -1455,9 +1462,7 @@ fn profile_decided(
         (ProfileScope::Across, true) => {
             format!("{held} more with an exponent held, from the fit the escalation ended at")
         }
-        (ProfileScope::Across, false) => {
-            format!("{held} fits with an exponent held across its range")
-        }
+        (ProfileScope::Across, false) => held_across(held),
     });
     if p.objective < here.objective * (1.0 - 1e-6) {
         let result = (best, curves, adequacy, gain_test);
@@ -3376,11 +3381,6 @@ fn pinned_folds(work: &Dataset, f: &Fitted) -> Result<Vec<(usize, usize)>, Ident
         .collect())
 }
 
-/// Whether a first fold of `f` on `work` is pinned ([`pinned_folds`]).
-fn pinned_fold(work: &Dataset, f: &Fitted) -> Result<bool, IdentifyError> {
-    Ok(!pinned_folds(work, f)?.is_empty())
-}
-
 /// `f`'s θ (and its start) moved so that the first fold of curve `ci` lies
 /// halfway between the measured steps `a` and `b` (within a tenth of that
 /// step), by [`move_fold_in`]; `false`, and `f` unchanged, when it cannot
@@ -3930,14 +3930,18 @@ fn escalate(
         .flatten()
         .map(|(p, held)| (p.read_shifted(shift), held));
     if let Some((p, held)) = profiled {
-        tried.push(format!(
-            "{held} fits with an exponent held across its range"
-        ));
+        tried.push(held_across(held));
         if p.objective < start.objective {
             start = p;
         }
     }
     Ok((Some(start), tried, (cands, trials)))
+}
+
+/// The escalation list's entry for `held` fits of the whole exponent
+/// profile ([`ProfileScope::Across`]).
+fn held_across(held: usize) -> String {
+    format!("{held} fits with an exponent held across its range")
 }
 
 /// Which values [`profile_exponents`] holds each exponent at.

@@ -161,6 +161,63 @@ pub fn undetermined_exponents(u: &Uncertainty) -> Vec<Undetermined> {
         .collect()
 }
 
+/// A free exponent that stopped just inside a natural bound whose value
+/// its 95 % interval holds: η near −1 (Coulomb friction). A note, not a
+/// warning: the data cannot tell the fit from the bound, and the bound has
+/// a physical meaning worth saying. Measured on a blind two-level Coulomb
+/// set (test `a_crawl_beside_a_natural_bound_converges_with_the_bound_held`):
+/// the default fit ends at η = −0.998 ± 0.007, significantly lower than the
+/// fit held at −1, which printed "eta = -1 (Coulomb friction)"; the free
+/// fit printed nothing about it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NearNaturalBound {
+    pub name: &'static str,
+    pub value: f64,
+    pub lower: f64,
+    pub upper: f64,
+    /// The bound the interval holds.
+    pub bound: f64,
+    /// What the bound means, e.g. "Coulomb friction".
+    pub meaning: &'static str,
+}
+
+impl NearNaturalBound {
+    pub fn describe(&self) -> String {
+        format!(
+            "{} = {:.4} is consistent with {} ({}): its 95 % interval [{:.4}, {:.4}] holds it",
+            self.name, self.value, self.bound, self.meaning, self.lower, self.upper
+        )
+    }
+}
+
+/// The free exponents of `u` off a natural bound whose 95 % interval holds
+/// it (η and −1, Coulomb friction; [`natural_meaning`]) and stays below 0:
+/// an interval that also holds η = 0 (a copy of viscous damping) or reaches
+/// [`EXPONENT_DOMAIN`] ([`undetermined_exponents`]) tells Coulomb friction
+/// from nothing.
+pub fn near_natural_bounds(u: &Uncertainty) -> Vec<NearNaturalBound> {
+    u.names
+        .iter()
+        .enumerate()
+        .filter(|&(k, &name)| {
+            name == "eta"
+                && u.lower[k] > EXPONENT_DOMAIN
+                && u.lower[k] <= -1.0
+                && u.upper[k] >= -1.0
+                && u.upper[k] < 0.0
+                && natural_meaning(ETA, true, u.values[k]).is_none()
+        })
+        .map(|(k, &name)| NearNaturalBound {
+            name,
+            value: u.values[k],
+            lower: u.lower[k],
+            upper: u.upper[k],
+            bound: -1.0,
+            meaning: natural_meaning(ETA, true, -1.0).unwrap_or("Coulomb friction"),
+        })
+        .collect()
+}
+
 /// A parameter at a bound that is a result of the fit.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NaturalBound {
@@ -281,6 +338,44 @@ mod tests {
             0.9,
         );
         assert!(ridges(&ok).is_empty() && crossings(&ok).is_empty());
+    }
+
+    /// η stopped just inside −1 with −1 in its interval (the blind
+    /// two-level Coulomb set's default fit, −0.998 in [−1.012, −0.984]) is
+    /// noted as consistent with Coulomb friction; not so η at −1 itself
+    /// (a natural bound, said elsewhere), an interval that misses −1, one
+    /// that also holds 0, one reaching −3, or ρ.
+    #[test]
+    fn an_exponent_whose_interval_holds_a_natural_bound_is_noted() {
+        let u = unc(
+            vec!["rho", "eta"],
+            vec![-0.998, -0.998079542],
+            vec![-1.012, -1.011818],
+            vec![-0.984, -0.9843413],
+            0.1,
+        );
+        let n = near_natural_bounds(&u);
+        assert_eq!(n.len(), 1);
+        assert_eq!((n[0].name, n[0].bound), ("eta", -1.0));
+        assert_eq!(
+            n[0].describe(),
+            "eta = -0.9981 is consistent with -1 (Coulomb friction): its 95 % interval [-1.0118, -0.9843] holds it"
+        );
+        for (v, lo, hi) in [
+            (-1.0, -1.01, -0.99),
+            (-0.97, -0.98, -0.96),
+            (-0.5, -1.1, 0.1),
+            (-0.9, -3.2, 1.4),
+        ] {
+            let u = unc(
+                vec!["delta", "eta"],
+                vec![0.2, v],
+                vec![0.1, lo],
+                vec![0.3, hi],
+                0.1,
+            );
+            assert!(near_natural_bounds(&u).is_empty(), "{v} [{lo}, {hi}]");
+        }
     }
 
     /// An exponent whose interval reaches −3 (the blind single-level fit

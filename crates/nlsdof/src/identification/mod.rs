@@ -241,13 +241,19 @@ impl FitResult {
     }
 
     /// Results worth a line that are not warnings: parameters at natural
-    /// bounds ("eta = -1 (Coulomb friction)"), vanished terms, and free
-    /// exponents the data do not determine (95 % interval reaching −3,
-    /// [`flags::undetermined_exponents`]).
+    /// bounds ("eta = -1 (Coulomb friction)"), free exponents whose valid
+    /// 95 % interval holds such a bound ([`flags::near_natural_bounds`]),
+    /// vanished terms, and free exponents the data do not determine (95 %
+    /// interval reaching −3, [`flags::undetermined_exponents`]).
     pub fn notes(&self) -> Vec<String> {
+        let near = match &self.uncertainty {
+            Some(u) if self.intervals_valid() => flags::near_natural_bounds(u),
+            _ => Vec::new(),
+        };
         self.natural
             .iter()
             .map(|n| n.describe())
+            .chain(near.iter().map(|n| n.describe()))
             .chain(self.inactive.iter().map(|i| i.describe()))
             .chain(
                 self.uncertainty

@@ -773,7 +773,7 @@ fn phase_choice(phase: Option<&Bound<'_, PyAny>>) -> PyResult<PhaseChoice> {
 }
 
 /// The outcome of `fit`: `parameters` (name -> {value, interval, unit,
-/// status, physical}), `cost` (Eq 31), `converged`, `warning`, `minima`
+/// status, physical}), `cost` (Eq 31), `converged`, `warning`, `notes`, `minima`
 /// (the distinct local minima found), `model` (the physical `Model` for
 /// `mass`, 1 kg if not given), `to_dict()` (the document of `nlsdof fit
 /// --json`) and `to_toml()` (its `--out` model file).
@@ -871,6 +871,14 @@ impl FitResult {
     #[getter]
     fn warning(&self) -> Option<String> {
         self.id.warning()
+    }
+    /// Results worth a line that are not warnings, as the CLI prints them
+    /// after "note:": a natural bound ("eta = -1 (Coulomb friction)"), an
+    /// exponent whose interval holds one, a term the data do not need, an
+    /// exponent the data do not determine. Empty when there are none.
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.id.fit.notes()
     }
     /// Whether the model fits every curve to within its noise (the
     /// self-check; `to_dict()["adequacy"]` has the details).

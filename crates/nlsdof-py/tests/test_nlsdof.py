@@ -931,3 +931,16 @@ def test_a_model_that_does_not_fit_its_noise_has_no_intervals():
     assert first.startswith("WARNING: the model does not fit"), first
     assert f"residual {d['misfit']:.1f}x the noise" in first, (first, d["misfit"])
     assert all(p["interval"] is None for p in r.parameters.values())
+
+
+def test_notes_are_the_cli_notes(cli):
+    # a blind two-level Coulomb set (crates/nlsdof/tests/data): the default
+    # fit ends at eta = -0.998 with -1 inside its interval, which it notes
+    path = ROOT / "crates" / "nlsdof" / "tests" / "data" / "blind_h037_friction.csv"
+    m = 16.020598116319658
+    r = nlsdof.fit(nlsdof.read_stepped_sine(path), mass=m, seed=7)
+    assert r.warning is None
+    assert any("consistent with -1 (Coulomb friction)" in n for n in r.notes), r.notes
+    assert r.notes == r.to_dict()["notes"]
+    printed = run_cli(cli, "fit", path, "--mass", repr(m), "--seed", "7")
+    assert [l[len("note: "):] for l in printed.splitlines() if l.startswith("note: ")] == r.notes

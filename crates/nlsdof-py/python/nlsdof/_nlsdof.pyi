@@ -418,6 +418,9 @@ class FitResult:
     @property
     def warning(self) -> str | None: ...
     @property
+    def notes(self) -> list[str]:
+        """Results that are not warnings, e.g. "eta = -1 (Coulomb friction)"."""
+    @property
     def adequate(self) -> bool: ...
     @property
     def minima(self) -> list[dict[str, Any]]: ...

@@ -880,7 +880,7 @@ fn a_fold_still_pinned_within_the_noise_is_profiled() {
 /// Blind h032-mixed of random seed 3339137987 (`blind_suite.py`: six
 /// levels swept up and down, 300 steps, no phase, ρ = 3.63, η = 0.68):
 /// the gain freed, the refit from folds moved past the points still on
-/// their branch lowered the objective 25x in its one round of 25
+/// their branch lowered the objective 24.5x in its one round of 25
 /// iterations on every point and stopped at that limit, and the fit ended
 /// "did not converge (max-iterations)" although it had found the optimum
 /// (0.936x the truth's Eq 31 cost): a false alarm. That refit is now

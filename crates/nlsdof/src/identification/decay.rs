@@ -286,7 +286,7 @@ fn analytic_pieces(
 }
 
 /// Analytic signal of `x` (mean removed) restricted to the band `[f1, f2]` Hz
-/// (see [`analytic_pieces`] for records longer than 2^19 samples).
+/// (see `analytic_pieces` for records longer than 2^19 samples).
 pub fn analytic_signal(x: &[f64], fs: f64, band: (f64, f64)) -> Vec<Complex<f64>> {
     let mut z = Vec::with_capacity(x.len());
     analytic_pieces(x, fs, band, Cancel::NEVER, &mut |p| z.extend_from_slice(p))

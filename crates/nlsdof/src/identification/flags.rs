@@ -106,7 +106,7 @@ impl BoundCrossing {
 /// requires them positive: α, δ and the gain. (Whether the data exclude a
 /// zero nonlinear coefficient β or κ is not read off its linearised
 /// interval, which the exponent distorts — `β = β_ref/(g(ρ) A^ρ)` — but
-/// tested by refitting without the term, [`super::identify`] stage 5.)
+/// tested by refitting without the term, [`super::identify()`] stage 5.)
 pub fn crossings(u: &Uncertainty) -> Vec<BoundCrossing> {
     u.names
         .iter()

@@ -74,7 +74,7 @@
 //!      ([`super::flags::Inactive`]).
 //! 6. **All points** (`refine_all_points`): data longer than
 //!    `refine_points` were raced on a subsample; the winner is judged and
-//!    refined on every point (at most [`polish_rounds`] rounds of
+//!    refined on every point (at most `polish_rounds` rounds of
 //!    [`POLISH_ITERATIONS`] while a round ends at its limit), its folds
 //!    moved past the points still on their branch (`reassign_jumps`), and
 //!    the lowest objective kept. A result that still did not converge has
@@ -204,7 +204,7 @@ fn polish_rounds(n: usize) -> usize {
 pub const RACE_ITERATIONS: usize = 30;
 
 /// Candidates stopped by the race's limit within this factor of the best
-/// objective continue ([`race`]).
+/// objective continue (`race`).
 pub const CONTINUE_FACTOR: f64 = 30.0;
 
 /// At most this many stopped candidates continue.
@@ -2541,7 +2541,7 @@ fn refine_all_points(
             // the refit from the moved folds is continued as the polish
             // was (measured: blind h032-mixed of seed 3339137987, six
             // levels up and down, gain free: the move lowered the
-            // objective 25x in one round of 25 iterations, which ended at
+            // objective 24.5x in one round of 25 iterations, which ended at
             // its limit, "did not converge (max-iterations)", while three
             // more iterations converged)
             let mut r = continue_unfinished(setup, r, fit_data)?;
@@ -3961,11 +3961,11 @@ enum ProfileScope {
     Near,
 }
 
-/// Most values of each exponent that [`profile_exponents`] holds across
+/// Most values of each exponent that `profile_exponents` holds across
 /// its axis.
 pub const PROFILE_VALUES: usize = 8;
 
-/// [`profile_exponents`] also holds each exponent this far either side of
+/// `profile_exponents` also holds each exponent this far either side of
 /// the fit's value (the axis values, 1.35 apart on η's default axis, can
 /// step over a neighbouring basin: blind h003-mixed of seed 2711270212,
 /// fit at η 0.41, truth 0.92). The best of these held fits is freed beside

@@ -603,7 +603,7 @@ pub fn predicted_jumps(data: &Dataset, theta: &Parameters) -> Result<Vec<Option<
 /// the model sees `input_gain · γ` (the forcing gain of a stepped-sine fit,
 /// the `[signal] input_gain` of a model file), and each sweep starts on the
 /// stable state nearest the curve's measured first amplitude (sweep rule 1′,
-/// [`objective::model_amplitudes`]). One [`LevelResponse`] per curve, in data
+/// [`objective::model_amplitudes`]). One [`LevelResponse`](crate::LevelResponse) per curve, in data
 /// order; its `gamma` is the measured level γ (not `input_gain · γ`) and its
 /// points are in sweep order.
 ///

@@ -54,7 +54,7 @@
 //! correlated and capped, hence above the nominal 0.1 %), 3.84 in 7.8 %. (A first
 //! version estimated the scale in a window of 41 steps around each point;
 //! next to narrow peaks it underestimated the noise, and the χ² tests of
-//! [`super::identify`] then kept near-copies of the linear terms.)
+//! [`super::identify()`] then kept near-copies of the linear terms.)
 
 //! ## Adequacy
 //! The statistic of a curve is the mean of `z_i² = (r_i/σ̂_i)²` over its

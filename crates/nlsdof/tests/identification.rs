@@ -184,6 +184,48 @@ fn problem_jacobian_in_optimisation_variables_matches_finite_differences() {
     }
 }
 
+/// The evaluation a solve keeps (the lowest-cost one with the Jacobian it
+/// asked for) is handed out at exactly its θ, once, and is bit for bit the
+/// fresh evaluation there (the oracle: `evaluate_spec`); anywhere else the
+/// problem evaluates afresh.
+#[test]
+fn the_kept_evaluation_is_the_fresh_one() {
+    let th = truth(ModelKind::Generalised);
+    let data = synthetic(&th, &[0.2, 0.5], 8.0, 13.0, 25, true);
+    let spec = FitSpec::new(ModelKind::Generalised, &data);
+    let p = Problem::new(&data, &spec).unwrap();
+    let mut near = th;
+    near[ALPHA] *= 1.01;
+    let mut far = th;
+    far[ALPHA] *= 1.2;
+    for t in [far, near] {
+        p.residuals_and_jacobian(&p.u_of(&t)).unwrap();
+    }
+    let bits = |e: &objective::Evaluation| -> Vec<u64> {
+        let jac = e.jacobian.as_ref().unwrap();
+        e.model
+            .iter()
+            .chain(&e.residuals)
+            .chain(jac.iter().flatten())
+            .map(|v| v.to_bits())
+            .collect()
+    };
+    // the lower of the two (near the truth) was kept, at θ(u) as the solver saw it
+    let at = p.theta(&p.u_of(&near));
+    let fresh = objective::evaluate_spec(&data, &spec, &at, true).unwrap();
+    let kept = p.evaluation_at(&at).unwrap();
+    assert_eq!(bits(&kept), bits(&fresh));
+    // handed out once; evaluated afresh after that, and elsewhere
+    assert_eq!(bits(&p.evaluation_at(&at).unwrap()), bits(&fresh));
+    let other = p.theta(&p.u_of(&far));
+    assert_eq!(
+        bits(&p.evaluation_at(&other).unwrap()),
+        bits(&objective::evaluate_spec(&data, &spec, &other, true).unwrap())
+    );
+    // a clone starts with nothing kept, and gives the same numbers
+    assert_eq!(bits(&p.clone().evaluation_at(&at).unwrap()), bits(&fresh));
+}
+
 #[test]
 fn noise_free_recovery_of_every_model() {
     for kind in ModelKind::ALL {

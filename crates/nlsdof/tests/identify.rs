@@ -901,6 +901,41 @@ fn a_refit_from_moved_folds_is_continued_to_convergence() {
     assert_trusted(&id);
 }
 
+/// Blind h008-hardening of random seed 233097205 (`blind_suite.py`: one
+/// level swept up, 300 steps, no phase, ρ = 4.92, no nonlinear damping):
+/// the fit converged within the noise at ρ 4.772 ± 0.049, 1.056x the
+/// truth's Eq 31 cost, with its fold pinned above the last step on its
+/// branch after the unpin refit, and neither profile moved it (held half a
+/// unit away the others refit 1.6x and 2.8x above the fit): a miss without
+/// a flag. With ρ held two standard errors away they refit lower; a fold
+/// still pinned after the profiles now gets that step
+/// (`ProfileScope::Fine`).
+#[test]
+fn an_exponent_held_two_standard_errors_away_frees_a_pinned_fit() {
+    let data = blind_set(include_str!(
+        "data/blind_h008_hardening_pinned_one_level.csv"
+    ));
+    let truth = physical_truth(
+        5.123796599901752,
+        [
+            244.82127129463433,
+            0.10641733613465416,
+            0.007029734583853076,
+        ],
+        [4.921691505259032, 0.0, 0.0],
+    );
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert_trusted(&id);
+    assert!(
+        id.adequacy
+            .escalation
+            .iter()
+            .any(|t| t.contains("two standard errors")),
+        "{:?}",
+        id.adequacy.escalation
+    );
+}
+
 /// Two blind in-family sets of one level swept up with phase
 /// (`../shared/tools/blind_suite.py`: h016-mixed of seed 2711270301, 300
 /// steps, ρ = 5.29, η = 2.17; h013-mixed of seed 2711270232, 120 steps,

@@ -386,10 +386,12 @@ fn fit_impl(
         })
         .collect();
     let theta = problem.theta(&best.result.u);
-    assess(
+    // the solve's own evaluation at θ when it kept one (the same numbers)
+    let e = problem.evaluation_at(&theta)?;
+    assess_evaluated(
         data,
         spec,
-        theta,
+        (theta, e),
         best.result.termination,
         best.result.iterations,
         minima,
@@ -464,8 +466,20 @@ pub(crate) fn assess(
     iterations: usize,
     minima: Vec<Minimum>,
 ) -> Result<FitResult, FitError> {
-    let n_amp = data.len();
     let e = objective::evaluate_spec(data, spec, &theta, true)?;
+    assess_evaluated(data, spec, (theta, e), termination, iterations, minima)
+}
+
+/// [`assess`] with the evaluation (with the Jacobian) at θ already made.
+fn assess_evaluated(
+    data: &Dataset,
+    spec: &FitSpec,
+    (theta, e): (Parameters, objective::Evaluation),
+    termination: Termination,
+    iterations: usize,
+    minima: Vec<Minimum>,
+) -> Result<FitResult, FitError> {
+    let n_amp = data.len();
     let n_phase = match spec.phase_weight {
         Some(_) => data
             .curves

@@ -504,6 +504,15 @@ fn physical_truth(m: f64, [k, c, k_r]: [f64; 3], [rho, c_e, eta]: [f64; 3]) -> P
     Parameters::from([k / m, c / m, k_r / m, rho, c_e / m, eta, 1.0])
 }
 
+/// The escalation tried a step whose entry contains `what`.
+fn assert_tried(id: &Identification, what: &str) {
+    assert!(
+        id.adequacy.escalation.iter().any(|t| t.contains(what)),
+        "{what}: {:?}",
+        id.adequacy.escalation
+    );
+}
+
 /// The fit says nothing alarming: converged, and adequate to its noise.
 fn assert_trusted(id: &Identification) {
     assert!(
@@ -866,14 +875,7 @@ fn a_fold_still_pinned_within_the_noise_is_profiled() {
         let data = blind_set(csv);
         let id = default_fit_finds_the_optimum(&data, &truth);
         assert_trusted(&id);
-        assert!(
-            id.adequacy
-                .escalation
-                .iter()
-                .any(|t| t.contains("exponent held")),
-            "{:?}",
-            id.adequacy.escalation
-        );
+        assert_tried(&id, "exponent held");
     }
 }
 
@@ -926,14 +928,7 @@ fn an_exponent_held_two_standard_errors_away_frees_a_pinned_fit() {
     );
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
-    assert!(
-        id.adequacy
-            .escalation
-            .iter()
-            .any(|t| t.contains("two standard errors")),
-        "{:?}",
-        id.adequacy.escalation
-    );
+    assert_tried(&id, "two standard errors");
 }
 
 /// Blind h047-mixed of seed 2711280110 (`blind_suite.py`: four levels
@@ -1144,14 +1139,7 @@ fn an_exponent_profile_finds_the_basin_no_candidate_reached() {
     let (data, truth) = blind_h013();
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert!(id.adequacy.adequate, "{:?}", id.adequacy);
-    assert!(
-        id.adequacy
-            .escalation
-            .iter()
-            .any(|t| t.contains("exponent held")),
-        "{:?}",
-        id.adequacy.escalation
-    );
+    assert_tried(&id, "exponent held");
 }
 
 /// Blind set h031-hardening (`../shared/tools/blind_suite.py`, seed

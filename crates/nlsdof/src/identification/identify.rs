@@ -3544,7 +3544,7 @@ fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, Identify
         for (ci, c) in work.curves.iter().enumerate() {
             // a fold just past the end of a sweep without a jump: moved
             // out on the extended curve (`fold_past_the_end`)
-            let (on, target) = match matches[ci].fold {
+            let (on, target, margin) = match matches[ci].fold {
                 Some((wf, _)) => {
                     // the measured step interval around the fold
                     let Some((_, lo, hi)) = step_cell(c, wf) else {
@@ -3560,14 +3560,15 @@ fn keep_folds_off_steps(best: Fitted, work: &Dataset) -> Result<Fitted, Identify
                     } else {
                         continue;
                     };
-                    (std::borrow::Cow::Borrowed(work), target)
+                    (std::borrow::Cow::Borrowed(work), target, margin)
                 }
                 None => match fold_past_the_end(work, ci, &best.fit.theta) {
-                    Some((ext, target)) => (std::borrow::Cow::Owned(ext), target),
+                    Some((ext, target)) => {
+                        (std::borrow::Cow::Owned(ext), target, FOLD_MARGIN * target)
+                    }
                     None => continue,
                 },
             };
-            let margin = FOLD_MARGIN * target;
             let Some(theta) = move_fold(&on, &best, ci, target, 0.5 * margin)? else {
                 continue;
             };

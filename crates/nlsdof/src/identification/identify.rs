@@ -87,7 +87,8 @@
 //!    away from it (a minimum-norm change of the parameters), so that which
 //!    branch the model's sweep is on at every measured step does not depend
 //!    on the last digits of the parameters or of the solver that
-//!    re-evaluates them. A fit whose late-fold pull left an exponent
+//!    re-evaluates them; so is a fold within that margin past the last step
+//!    of a sweep without a jump (`fold_past_the_end`). A fit whose late-fold pull left an exponent
 //!    within 1 % of an end of its range has its terms settled again there.
 //! 8. **Self-check against the noise** (`judge`, `escalate`): each curve's
 //!    noise is estimated from the fit's residuals ([`super::noise`]); where
@@ -118,7 +119,9 @@
 //!    a fold still pinned after that (a constrained optimum) has each
 //!    exponent held half a unit either side (`profile_decided`,
 //!    `ProfileScope::Near`), a lower fit kept only when significantly
-//!    lower (`significantly_lower`).
+//!    lower (`significantly_lower`); a fold pinned still after the profiles
+//!    has each exponent held two standard errors either side
+//!    (`ProfileScope::Fine`), kept on the same test.
 //! 9. **Jump readings** (`decide_readings`, [`ReadingChoice::Auto`], only
 //!    when the fit still does not fit its noise after the escalation): a
 //!    stepped sine can leave its branch before the fold, never after. The

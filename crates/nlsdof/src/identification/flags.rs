@@ -207,13 +207,15 @@ pub fn near_natural_bounds(u: &Uncertainty) -> Vec<NearNaturalBound> {
                 && u.upper[k] < 0.0
                 && natural_meaning(ETA, true, u.values[k]).is_none()
         })
-        .map(|(k, &name)| NearNaturalBound {
-            name,
-            value: u.values[k],
-            lower: u.lower[k],
-            upper: u.upper[k],
-            bound: -1.0,
-            meaning: natural_meaning(ETA, true, -1.0).unwrap_or("Coulomb friction"),
+        .filter_map(|(k, &name)| {
+            Some(NearNaturalBound {
+                name,
+                value: u.values[k],
+                lower: u.lower[k],
+                upper: u.upper[k],
+                bound: -1.0,
+                meaning: natural_meaning(ETA, true, -1.0)?,
+            })
         })
         .collect()
 }

@@ -1340,7 +1340,9 @@ fn stages(
         if plan.escalate && !profile_now && still_pinned {
             let datas = (&fit_data, &refine_data);
             let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
-            profile_decided(&setup, &ex, datas, result, ProfileScope::Near, progress)?;
+            if profile_decided(&setup, &ex, datas, result, ProfileScope::Near, progress)? {
+                still_pinned = !pinned_folds(&fit_data, &best)?.is_empty();
+            }
         }
         // A fold pinned still after the profiles: the fit stopped against
         // that constraint is no stationary point, and with an exponent held
@@ -1357,7 +1359,7 @@ fn stages(
         // best freed fit of the two steps was chosen before its decisions,
         // and blind h036-hardening of 2711280106 ended at 1.111x instead of
         // 0.994x (its finer fit lost its damping term there).
-        if plan.escalate && still_pinned && !pinned_folds(&fit_data, &best)?.is_empty() {
+        if plan.escalate && still_pinned {
             let datas = (&fit_data, &refine_data);
             let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
             profile_decided(&setup, &ex, datas, result, ProfileScope::Fine, progress)?;
@@ -1455,9 +1457,10 @@ type Standing<'a> = (
 /// The exponent profile ([`profile_exponents`]) from the decided fit `best`
 /// on the race's data (`refine_data`), with the fit's readings carried
 /// there; a profiled fit with a lower objective there goes through the
-/// decisions and replaces `best` by [`finish_and_adopt_if_better`]. The
-/// escalation list names it (a second profile, after the escalation's,
-/// says where from). A fit the race's data cannot assess is left as it is.
+/// decisions and replaces `best` by [`finish_and_adopt_if_better`]
+/// (`true` when it did). The escalation list names it (a second profile,
+/// after the escalation's, says where from). A fit the race's data cannot
+/// assess is left as it is.
 fn profile_decided(
     setup: &Setup,
     ex: &Exploration,
@@ -1465,14 +1468,14 @@ fn profile_decided(
     (best, curves, adequacy, gain_test): Standing<'_>,
     scope: ProfileScope,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
-) -> Result<(), IdentifyError> {
+) -> Result<bool, IdentifyError> {
     let start = restarted(&best.spec, &best.fit.theta);
     let spec = carry_readings(&start, fit_data, refine_data);
     let Ok(here) = Fitted::assessed(refine_data, spec, best.fit.theta, &best.fit) else {
-        return Ok(());
+        return Ok(false);
     };
     let Some((p, held)) = profile_exponents(setup, ex, refine_data, &here, scope, progress) else {
-        return Ok(());
+        return Ok(false);
     };
     let again = adequacy
         .escalation
@@ -1496,9 +1499,16 @@ fn profile_decided(
             ProfileScope::Across => Lower::Any,
             ProfileScope::Near | ProfileScope::Fine => Lower::Significantly,
         };
-        finish_and_adopt_if_better(setup, p, (fit_data, refine_data), result, lower, progress)?;
+        return finish_and_adopt_if_better(
+            setup,
+            p,
+            (fit_data, refine_data),
+            result,
+            lower,
+            progress,
+        );
     }
-    Ok(())
+    Ok(false)
 }
 
 fn validate(plan: &FitPlan) -> Result<(), IdentifyError> {

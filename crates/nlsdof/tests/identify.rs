@@ -903,6 +903,30 @@ fn a_refit_from_moved_folds_is_continued_to_convergence() {
     assert_trusted(&id);
 }
 
+/// Blind h001-mixed of fresh seed 2711280107 (`blind_suite.py`: six
+/// levels swept down, 300 steps, no phase, ρ 2.05, η 1.51): the race's
+/// winner, at η 0.029 with κ beside δ, lost its damping term on the
+/// 906-point subsample (statistic 5.88 against 5.99), and every point then
+/// refined without it to 1.262x the truth's Eq 31 cost, within the noise:
+/// a miss without a flag. The removed term is now tested again on every
+/// point (`retest_removed_terms`), which needs it.
+#[test]
+fn a_term_removed_on_the_subsample_is_tested_again_on_every_point() {
+    let data = blind_set(include_str!("data/blind_h001_mixed_term_retested.csv"));
+    let truth = physical_truth(
+        0.010668979579794501,
+        [33.67161945426202, 0.002348468961608824, 608.521289872339],
+        [
+            2.0462819672639094,
+            0.00014283476857762298,
+            1.5119719664993934,
+        ],
+    );
+    let id = default_fit_finds_the_optimum(&data, &truth);
+    assert_trusted(&id);
+    assert_eq!(id.fit.status[KAPPA], Status::Free, "{:?}", id.fit.inactive);
+}
+
 /// Blind h008-hardening of random seed 233097205 (`blind_suite.py`: one
 /// level swept up, 300 steps, no phase, ρ = 4.92, no nonlinear damping):
 /// the fit converged within the noise at ρ 4.772 ± 0.049, 1.056x the

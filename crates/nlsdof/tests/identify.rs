@@ -927,6 +927,34 @@ fn a_term_removed_on_the_subsample_is_tested_again_on_every_point() {
     assert_eq!(id.fit.status[KAPPA], Status::Free, "{:?}", id.fit.inactive);
 }
 
+/// Blind h008-mixed of random seed 4120673301 (`blind_suite.py`: five
+/// levels swept up and down, 200 steps, no phase, ρ 5.04, η 2.19): the fit
+/// converged within the noise at 1.128x the truth's Eq 31 cost, level 5's
+/// up-sweep fold 2e-5 Hz below the step after it. On the straight line to
+/// the truth the objective falls monotonically while that fold moves into
+/// its cell, but LM stops at the step: every trial step crosses it. The
+/// unpin refit now also holds each pinned fold at the middle of its cell
+/// (`refit_with_folds_held`), then frees it; held, level 5's fold lets
+/// level 4's be pinned in turn, and holding both ends at 1.063x, no fold
+/// pinned. Still above 1.05x: the freed fit stops crawling along the
+/// β–ρ ridge (small decrement) while LM from the truth ends at 0.998x. This
+/// guards the held refit's gain; it is not yet the optimum.
+#[test]
+fn folds_pinned_at_their_steps_are_held_inside_their_cells() {
+    let data = blind_set(include_str!("data/blind_h008_mixed_folds_held.csv"));
+    let truth = physical_truth(
+        2.039966084528128,
+        [107733.03817396067, 1.139606804415167, 3944906094849427.5],
+        [5.035237196513762, 0.17301609916581145, 2.190173402958884],
+    );
+    let mut plan = FitPlan::new(ModelKind::Generalised);
+    plan.seed = 7;
+    let id = identify(&data, &plan, &|_| {}).unwrap();
+    let eq31 = |th: &Parameters| objective::evaluate(&data, th, false).unwrap().cost();
+    let ratio = eq31(&id.fit.theta) / eq31(&truth);
+    assert!(ratio <= 1.07, "cost/truth {ratio}");
+}
+
 /// Blind h008-hardening of random seed 233097205 (`blind_suite.py`: one
 /// level swept up, 300 steps, no phase, ρ = 4.92, no nonlinear damping):
 /// the fit converged within the noise at ρ 4.772 ± 0.049, 1.056x the
@@ -1318,12 +1346,17 @@ fn an_exponent_held_at_zero_with_its_coefficient_free_is_refused() {
 /// (max-iterations)": a false alarm. Holding the parameter at its natural
 /// bound while the rest converges (`hold_natural_bounds`) ends it
 /// converged, at a lower cost, and still reported as Coulomb friction.
-/// That fit (without the escalation's searches) ends with level 2's fold
-/// pinned at a measured step; the default fit profiles it
-/// (`a_fold_still_pinned_within_the_noise_is_profiled`) and ends lower
-/// still, by more than the noise explains, with η −0.998 ± 0.007: inside
-/// its range, its interval reaching −1, and noted as consistent with
-/// Coulomb friction ([`flags::near_natural_bounds`]).
+/// That fit (without the escalation's searches) ended with level 2's fold
+/// pinned at a measured step, and the default fit profiled it lower. Since
+/// the eleventh session the unpin refit also holds a pinned fold inside its
+/// cell (`refit_with_folds_held`), and the fit without the escalation
+/// reaches that lower optimum itself, before any crawl (η −0.998, 0.870×
+/// the truth's Eq 31 cost), so this set no longer reaches
+/// `hold_natural_bounds`; either way the fit must end converged, at the
+/// optimum, and as Coulomb friction or consistent with it. The default fit
+/// ends no higher, with η −0.998 ± 0.007: inside its range, its interval
+/// reaching −1, and noted as consistent with Coulomb friction
+/// ([`flags::near_natural_bounds`]).
 #[test]
 fn a_crawl_beside_a_natural_bound_converges_with_the_bound_held() {
     let data = blind_set(include_str!("data/blind_h037_friction.csv"));
@@ -1338,18 +1371,19 @@ fn a_crawl_beside_a_natural_bound_converges_with_the_bound_held() {
     let eq31 = |th: &Parameters| objective::evaluate(&data, th, false).unwrap().cost();
     assert!(eq31(&held.fit.theta) <= 1.05 * eq31(&truth));
     assert_trusted(&held);
-    assert!(
-        held.fit
-            .natural
-            .iter()
-            .any(|n| n.name == "eta" && n.value == -1.0),
-        "{:?}",
-        held.fit.natural
-    );
+    let at_bound = held
+        .fit
+        .natural
+        .iter()
+        .any(|n| n.name == "eta" && n.value == -1.0);
+    let consistent = held.fit.notes().iter().any(|n| {
+        n.starts_with("eta = -0.99") && n.contains("consistent with -1 (Coulomb friction)")
+    });
+    assert!(at_bound || consistent, "{:?}", held.fit.notes());
     assert_eq!(held.fit.status[ETA], Status::Free);
     let id = default_fit_finds_the_optimum(&data, &truth);
     assert_trusted(&id);
-    assert!(id.fit.objective < held.fit.objective);
+    assert!(id.fit.objective <= held.fit.objective);
     let u = id.fit.uncertainty.as_ref().unwrap();
     let k = u.index("eta").unwrap();
     assert!(

@@ -3528,6 +3528,10 @@ fn refit_with_folds_held(
 ) -> Result<Option<Fitted>, IdentifyError> {
     use super::levenberg_marquardt::{minimise, LeastSquares};
     use super::objective::Problem;
+    // (the held objective is the measured-branch output error)
+    if best.spec.branch != super::objective::ResponseBranch::Measured {
+        return Ok(None);
+    }
     let plan = setup.plan;
     let problem = Problem::new(work, &best.spec)?;
     let (lo, hi) = problem.u_bounds();
@@ -4899,6 +4903,76 @@ mod tests {
             }
         }
         Dataset { curves }
+    }
+
+    /// Oracle: central differences. The Jacobian of [`FoldsHeld`] (the
+    /// output error's rows and the held fold's row, `fold_gradient`) in the
+    /// optimisation variables, on one hardening up-sweep of the model
+    /// itself with a jump.
+    #[test]
+    fn held_fold_jacobian_matches_differences() {
+        use super::super::levenberg_marquardt::LeastSquares;
+        use super::super::objective::{model_amplitudes, Problem};
+        let wn = 2.0 * std::f64::consts::PI * 10.0;
+        let (rho, eta, a_ref): (f64, f64, f64) = (2.6, 1.7, 0.01);
+        let beta = 0.08 * wn * wn / (crate::power_law::g_unchecked(rho) * a_ref.powf(rho));
+        let kappa = 0.8 * 0.02 * wn / (crate::power_law::g_unchecked(eta) * (wn * a_ref).powf(eta));
+        let theta =
+            super::super::Parameters::from([wn * wn, 0.02 * wn, beta, rho, kappa, eta, 1.0]);
+        let n = 120;
+        let omegas: Vec<f64> = (0..n)
+            .map(|i| 2.0 * std::f64::consts::PI * (8.0 + 10.0 * i as f64 / (n - 1) as f64))
+            .collect();
+        let mut data = Dataset {
+            curves: vec![Curve {
+                level: "L".into(),
+                gamma: 3.0,
+                direction: SweepDirection::Up,
+                omegas,
+                amplitudes: vec![1.0; n],
+                phases: None,
+                weights: vec![1.0; n],
+            }],
+        };
+        let model = model_amplitudes(&data, &theta).unwrap();
+        // measured 1 % off the model, so the residuals are not zero
+        data.curves[0].amplitudes = model[0]
+            .iter()
+            .enumerate()
+            .map(|(i, a)| a * (1.0 + 0.01 * ((i % 7) as f64 - 3.0) / 3.0))
+            .collect();
+        let spec = FitSpec::new(ModelKind::Generalised, &data);
+        let problem = Problem::new(&data, &spec).unwrap();
+        let (_, m) = evaluate_measured(&data, &theta, false, &MatchOptions::of(&spec)).unwrap();
+        let (wf, _) = m[0].fold.expect("the up-sweep jumps");
+        let held = FoldsHeld {
+            problem: &problem,
+            spec: &spec,
+            folds: vec![(0, wf * 0.999, 0.01 * wf)],
+            scale: 3.0,
+        };
+        let u = problem.u_of(&theta);
+        let (r, j) = held.residuals_and_jacobian(&u).unwrap();
+        let p = u.len();
+        assert_eq!(j.len(), r.len() * p);
+        let fold_row = r.len() - 1;
+        assert!(r[fold_row] != 0.0);
+        for k in 0..p {
+            let h = 1e-6 * u[k].abs().max(1e-3);
+            let (mut up, mut dn) = (u.clone(), u.clone());
+            up[k] += h;
+            dn[k] -= h;
+            let (rp, rm) = (held.residuals(&up).unwrap(), held.residuals(&dn).unwrap());
+            for row in [fold_row, 0, n / 2] {
+                let fd = (rp[row] - rm[row]) / (2.0 * h);
+                let an = j[row * p + k];
+                let tol = 1e-4 * an.abs().max(fd.abs()) + 1e-9 * r[row].abs().max(1.0);
+                assert!(
+                    (fd - an).abs() <= tol,
+                    "row {row} column {k}: fd {fd} analytic {an}"
+                );
+            }
+        }
     }
 
     /// Many levels are thinned by level (evenly, the extreme levels and

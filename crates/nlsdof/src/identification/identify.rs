@@ -2331,7 +2331,7 @@ fn retest_removed_terms(
     (fit_data, refine_data): (&Dataset, &Dataset),
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<Fitted, IdentifyError> {
-    if refine_data.len() >= fit_data.len() || fit_data.len() > POLISH_MAX_POINTS {
+    if !refined_on_every_point(fit_data, refine_data) {
         return Ok(best);
     }
     let plan = setup.plan;
@@ -2350,15 +2350,7 @@ fn retest_removed_terms(
         for j in [coef, exp] {
             spec.status[j] = Status::Free;
         }
-        let mut start = raced.fit.theta;
-        for j in 0..N_PARAMS {
-            match spec.status[j] {
-                Status::Free => {}
-                Status::Fixed(v) => start[j] = v,
-                Status::Absent => start[j] = 0.0,
-            }
-        }
-        spec.start = start;
+        let spec = restarted(&spec, &raced.fit.theta);
         let opts = limited(&plan.lm, plan.seed, DECISION_ITERATIONS);
         let Some(sub) = Fitted::fitted(refine_data, spec, &opts) else {
             continue;
@@ -2615,6 +2607,12 @@ fn carry_readings(spec: &FitSpec, from: &Dataset, to: &Dataset) -> FitSpec {
     s
 }
 
+/// Whether [`refine_all_points`] refines on every point: the race ran on
+/// a subsample, and every point is at most [`POLISH_MAX_POINTS`].
+fn refined_on_every_point(fit_data: &Dataset, refine_data: &Dataset) -> bool {
+    refine_data.len() < fit_data.len() && fit_data.len() <= POLISH_MAX_POINTS
+}
+
 /// Stage 5: the winner of a subsampled race refined on every point (data
 /// of at most [`POLISH_MAX_POINTS`]; kept when that converges, else the
 /// subsample's optimum is judged on every point).
@@ -2625,7 +2623,7 @@ fn refine_all_points(
     refine_data: &Dataset,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<Fitted, IdentifyError> {
-    if refine_data.len() >= fit_data.len() || fit_data.len() > POLISH_MAX_POINTS {
+    if !refined_on_every_point(fit_data, refine_data) {
         // nothing to refine, or too many points: the decisions ran on the
         // data the result is judged on (every point, or the subsample, then
         // judged on every point at the end); a decision's refit that its
@@ -3490,7 +3488,7 @@ fn unpin_folds(
     if !any {
         return Ok(best);
     }
-    let held = refit_with_folds_held(setup, &best, &moved, work, pinned)?;
+    let held = refit_with_folds_held(setup, &moved, work, pinned)?;
     let barrier = refit_behind_barrier(setup, best, moved, work, POLISH_ITERATIONS)?;
     Ok(match held {
         Some(h) if h.fit.cost < barrier.fit.cost => h,
@@ -3521,7 +3519,6 @@ const FOLD_HELD_WEIGHT: f64 = 10.0;
 /// refit on a smooth objective; freed there, the fit only descends.
 fn refit_with_folds_held(
     setup: &Setup,
-    best: &Fitted,
     moved: &Fitted,
     work: &Dataset,
     pinned: &[(usize, usize)],
@@ -3529,11 +3526,11 @@ fn refit_with_folds_held(
     use super::levenberg_marquardt::{minimise, LeastSquares};
     use super::objective::Problem;
     // (the held objective is the measured-branch output error)
-    if best.spec.branch != super::objective::ResponseBranch::Measured {
+    if moved.spec.branch != super::objective::ResponseBranch::Measured {
         return Ok(None);
     }
     let plan = setup.plan;
-    let problem = Problem::new(work, &best.spec)?;
+    let problem = Problem::new(work, &moved.spec)?;
     let (lo, hi) = problem.u_bounds();
     let opts = limited(&plan.lm, plan.seed, POLISH_ITERATIONS);
     let mut held_cells: Vec<(usize, usize)> = pinned.to_vec();
@@ -3554,7 +3551,6 @@ fn refit_with_folds_held(
             .collect();
         let held = FoldsHeld {
             problem: &problem,
-            spec: &best.spec,
             folds,
             scale,
         };
@@ -3562,11 +3558,11 @@ fn refit_with_folds_held(
             break;
         };
         let th = problem.theta(&r.u);
-        let Some(freed) = Fitted::fitted(work, restarted(&best.spec, &th), &opts) else {
+        let Some(freed) = Fitted::fitted(work, restarted(&moved.spec, &th), &opts) else {
             break;
         };
         let mut freed = continue_unfinished(setup, freed, work)?;
-        freed.fit.inactive = best.fit.inactive.clone();
+        freed.fit.inactive = moved.fit.inactive.clone();
         // freed, another fold can end pinned in its turn: it is held too,
         // from there
         let more: Vec<(usize, usize)> = pinned_folds(work, &freed)?
@@ -3593,7 +3589,6 @@ const FOLD_HELD_ROUNDS: usize = 3;
 /// target and the width of its step cell), for [`refit_with_folds_held`].
 struct FoldsHeld<'a> {
     problem: &'a super::objective::Problem<'a>,
-    spec: &'a FitSpec,
     /// `(curve, target, width)`, rad/s.
     folds: Vec<(usize, f64, f64)>,
     scale: f64,
@@ -3604,7 +3599,7 @@ impl FoldsHeld<'_> {
         let th = self.problem.theta(u);
         let work = self.problem.data;
         let (e, matches) =
-            evaluate_measured(work, &th, jacobian, &MatchOptions::of(self.spec)).ok()?;
+            evaluate_measured(work, &th, jacobian, &MatchOptions::of(self.problem.spec)).ok()?;
         let (mut r, mut j) = if jacobian {
             self.problem.residuals_and_jacobian_of(&th, e)?
         } else {
@@ -4947,7 +4942,6 @@ mod tests {
         let (wf, _) = m[0].fold.expect("the up-sweep jumps");
         let held = FoldsHeld {
             problem: &problem,
-            spec: &spec,
             folds: vec![(0, wf * 0.999, 0.01 * wf)],
             scale: 3.0,
         };

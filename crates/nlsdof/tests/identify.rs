@@ -945,22 +945,27 @@ fn a_term_removed_on_the_subsample_is_tested_again_on_every_point() {
 /// up-sweep fold 2e-5 Hz below the step after it. On the straight line to
 /// the truth the objective falls monotonically while that fold moves into
 /// its cell, but LM stops at the step: every trial step crosses it. The
-/// unpin refit now also holds each pinned fold at the middle of its cell
-/// (`refit_with_folds_held`), then frees it; held, level 5's fold lets
-/// level 4's be pinned in turn, and holding both ends at 1.063x, no fold
-/// pinned. Still above 1.05x: the freed fit stops crawling along the
-/// β–ρ ridge (small decrement) while LM from the truth ends at 0.998x. This
-/// guards the held refit's gain; it is not yet the optimum.
+/// unpin refit holds each pinned fold at the middle of its cell
+/// (`refit_with_folds_held`), then frees it: 1.063x, at η 1.50, a miss
+/// without a flag. The near profile then held η at 2.0 on the race's
+/// subsample, 12 % lower there, but carried through the decisions its
+/// refit on every point stopped at once above the standing fit; held at
+/// 2.0 on every point, the rest refit 6.3 % below the standing fit, which
+/// the noise-scaled test alone (`Σ z²` 9.2 lower) did not keep. Now the
+/// profile's exponent is held on every point too, and a drop of 1 % of the
+/// objective is kept: 0.997x.
 #[test]
-fn folds_pinned_at_their_steps_are_held_inside_their_cells() {
+fn a_profiled_exponent_is_held_on_every_point() {
     let data = blind_set(include_str!("data/blind_h008_mixed_folds_held.csv"));
     let truth = physical_truth(
         2.039966084528128,
         [107733.03817396067, 1.139606804415167, 3944906094849427.5],
         [5.035237196513762, 0.17301609916581145, 2.190173402958884],
     );
-    let (_, ratio) = fit_as_the_suite_runs(&data, &truth);
-    assert!(ratio <= 1.07, "cost/truth {ratio}");
+    let (id, ratio) = fit_as_the_suite_runs(&data, &truth);
+    assert!(ratio <= 1.05, "cost/truth {ratio}");
+    assert_trusted(&id);
+    assert_tried(&id, "held on every point");
 }
 
 /// Blind h008-hardening of random seed 233097205 (`blind_suite.py`: one

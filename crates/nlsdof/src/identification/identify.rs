@@ -1596,11 +1596,13 @@ fn adopt_if_better(
     lower: Lower,
 ) -> Result<bool, IdentifyError> {
     let judged = judge(fit_data, &alt);
-    let kept = match (judged.1.adequate, adequacy.adequate) {
-        (true, false) => true,
-        (false, true) => false,
-        _ => lower_enough(lower, fit_data, &alt, best)?,
-    };
+    let kept = replaces(
+        (judged.1.adequate, adequacy.adequate),
+        lower,
+        fit_data,
+        &alt,
+        best,
+    )?;
     if kept {
         adopt((best, curves, adequacy), alt, judged);
     }
@@ -2562,6 +2564,24 @@ fn lower_enough(
     })
 }
 
+/// Whether `alt` replaces the standing fit `best` on `data`: when it fits
+/// its noise and `best` does not (`adequate`: alt's, then best's), never
+/// the other way round, and, both alike, when its objective is lower as
+/// `lower` asks ([`lower_enough`]).
+fn replaces(
+    (alt_adequate, best_adequate): (bool, bool),
+    lower: Lower,
+    data: &Dataset,
+    alt: &Fitted,
+    best: &Fitted,
+) -> Result<bool, IdentifyError> {
+    Ok(match (alt_adequate, best_adequate) {
+        (true, false) => true,
+        (false, true) => false,
+        _ => lower_enough(lower, data, alt, best)?,
+    })
+}
+
 /// `alt` (a lower objective found on the race's data, or the held-gain
 /// race's winner) carried through the decisions and every point
 /// (`finish`), with its own gain test; it replaces the result `(best,
@@ -2583,11 +2603,13 @@ fn finish_and_adopt_if_better(
     let mut alt_gain = *gain_test;
     let mut alt = finish(setup, alt, fit_data, refine_data, &mut alt_gain, progress)?;
     let judged = judge(fit_data, &alt);
-    let kept = match (judged.1.adequate, adequacy.adequate) {
-        (true, false) => true,
-        (false, true) => false,
-        _ => lower_enough(lower, fit_data, &alt, best)?,
-    };
+    let kept = replaces(
+        (judged.1.adequate, adequacy.adequate),
+        lower,
+        fit_data,
+        &alt,
+        best,
+    )?;
     if kept {
         // terms `best` found inactive that `alt` still lacks stay named
         // (at `alt`'s value of their exponent)
@@ -3488,7 +3510,10 @@ fn pull_late_folds(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted
 ///   the truth's objective with the top up-sweep's fold one step early).
 ///
 /// With `least_change_too` (the race), a fold the least-misfit move cannot
-/// place is moved by the least change in `u` instead (below). The late-fold
+/// place is moved by the least change in `u` instead (below). Without it
+/// (the pull on every point), a refit that leaves a moved fold outside its
+/// cell is tried again with every other fold held inside its own
+/// (`move_folds_jointly`). The late-fold
 /// pull on every point does without it: there no measured case needed it,
 /// and on the 24 °C beam it cost a quarter of the Duffing fit's time
 /// (0.84–0.96 s → 1.08–1.17 s, same result) for refits that were not kept.

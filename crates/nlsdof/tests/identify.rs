@@ -998,6 +998,30 @@ fn a_fold_pulled_into_its_cell_keeps_the_other_folds_in_theirs() {
     }
 }
 
+/// Blind h025-mixed of seed 2711280113 (`blind_suite.py`: one level swept
+/// up and down, 200 steps, no phase, ρ 4.12, η 2.85): the screen freed the
+/// gain at 1.35, and the free race and its escalation ended at η 7.1 with
+/// the gain 1.041, 1.685x the truth's Eq 31 cost (flagged: 2.3x the
+/// noise). The held race's winner (η 5.84), carried through the stages,
+/// ended 1.9x the noise. With the gain fixed at 1 the default stages reach
+/// 1.006x: a fit whose freed gain is near 1 and that does not fit its
+/// noise now gets the escalation again with the gain held.
+#[test]
+fn a_freed_gain_near_one_that_does_not_fit_escalates_again_held() {
+    let data = blind_set(include_str!(
+        "data/blind_h025_mixed_gain_held_escalation.csv"
+    ));
+    let truth = physical_truth(
+        5.396514112285732,
+        [131943.20718700276, 15.61597133037484, 1.1240352348987875e17],
+        [4.123112017482026, 1818.3112226310125, 2.8534786347824617],
+    );
+    let (id, ratio) = fit_as_the_suite_runs(&data, &truth);
+    assert!(ratio <= 1.05, "cost/truth {ratio}");
+    assert_trusted(&id);
+    assert_tried(&id, "with the gain held at 1");
+}
+
 /// Blind h008-hardening of random seed 233097205 (`blind_suite.py`: one
 /// level swept up, 300 steps, no phase, ρ = 4.92, no nonlinear damping):
 /// the fit converged within the noise at ρ 4.772 ± 0.049, 1.056x the

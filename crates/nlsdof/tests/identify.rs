@@ -968,36 +968,6 @@ fn a_profiled_exponent_is_held_on_every_point() {
     assert_tried(&id, "held on every point");
 }
 
-/// Blind h058-friction of fresh seed 2811280603 (`blind_suite.py`: two
-/// levels swept up, 120 steps, with phase, Coulomb friction, ρ 0.65): the
-/// fit's level-1 fold sat 0.03 Hz past the step after the measured jump,
-/// 1068x the truth's Eq 31 cost (flagged, a late fold). The late-fold pull
-/// moved it to the middle of its cell, and the move carried level 2's fold
-/// a step early, where the barrier refit held it: that refit ended 1.4x
-/// above the fit and was not kept. The pull now also tries the same move
-/// with every other fold held inside its cell (`move_folds_jointly`).
-/// Still not the optimum: the refit pins level 1's fold at the step from
-/// inside, and the fit must then say that it does not fit.
-#[test]
-fn a_fold_pulled_into_its_cell_keeps_the_other_folds_in_theirs() {
-    let data = blind_set(include_str!(
-        "data/blind_h058_friction_fold_moves_jointly.csv"
-    ));
-    let truth = physical_truth(
-        0.7479420131863589,
-        [21318591.94453207, 8.550708449617355, 3483320001.1867514],
-        [0.6458264320475111, 0.17807542820429842, -1.0],
-    );
-    let (id, ratio) = fit_as_the_suite_runs(&data, &truth);
-    assert!(ratio < 1.5, "cost/truth {ratio}");
-    if ratio > 1.05 {
-        assert!(
-            !id.fit.converged || !id.adequacy.adequate,
-            "a miss without a flag: cost/truth {ratio}"
-        );
-    }
-}
-
 /// Blind h025-mixed of seed 2711280113 (`blind_suite.py`: one level swept
 /// up and down, 200 steps, no phase, ρ 4.12, η 2.85): the screen freed the
 /// gain at 1.35, and the free race and its escalation ended at η 7.1 with

@@ -3585,10 +3585,7 @@ fn pull_late_folds(setup: &Setup, best: Fitted, work: &Dataset) -> Result<Fitted
 ///   the truth's objective with the top up-sweep's fold one step early).
 ///
 /// With `least_change_too` (the race), a fold the least-misfit move cannot
-/// place is moved by the least change in `u` instead (below). Without it
-/// (the pull on every point), a refit that leaves a moved fold outside its
-/// cell is tried again with every other fold held inside its own
-/// (`move_folds_jointly`). The late-fold
+/// place is moved by the least change in `u` instead (below). The late-fold
 /// pull on every point does without it: there no measured case needed it,
 /// and on the 24 °C beam it cost a quarter of the Duffing fit's time
 /// (0.84–0.96 s → 1.08–1.17 s, same result) for refits that were not kept.
@@ -3603,8 +3600,6 @@ fn relocate_folds(
     let mut moved = best.clone();
     let mut any = false;
     let mut off = 0;
-    // (curve, target, tolerance) of each fold moved
-    let mut targets: Vec<(usize, f64, f64)> = Vec::new();
     for (ci, c) in work.curves.iter().enumerate() {
         let n = c.omegas.len();
         let model = &e.model[off..off + n];
@@ -3640,52 +3635,13 @@ fn relocate_folds(
         // basin all kept their folds a step early because the least-misfit
         // move failed, ended at 1.12x the truth's cost; with this move four
         // of them reached 0.98x)
-        let w = &c.omegas;
-        targets.push((ci, 0.5 * (w[a] + w[b]), 0.1 * (w[a] - w[b]).abs()));
         any |= move_fold_between(work, &mut moved, ci, (a, b), true)?
             || (least_change_too && move_fold_between(work, &mut moved, ci, (a, b), false)?);
     }
     if !any {
         return Ok(best);
     }
-    let first = refit_behind_barrier(setup, best.clone(), moved, work, iterations)?;
-    // (each moved fold's target is the middle of its cell, its tolerance a
-    // tenth of the cell)
-    let in_cell = |&(ci, target, tol): &(usize, f64, f64)| {
-        first_fold(work, &first, ci, &first.fit.theta)
-            .is_some_and(|(wf, _)| (wf - target).abs() < 5.0 * tol)
-    };
-    if least_change_too || targets.iter().all(in_cell) {
-        return Ok(first);
-    }
-    // The move of one fold can carry another curve's fold out of its step
-    // cell, where the barrier then holds it, and the refit fails (measured:
-    // blind h058-friction of seed 2811280603, two levels up, with phase,
-    // Coulomb friction, ρ 0.65: level 1's fold 0.03 Hz past the step after
-    // the measured jump, 1068x the truth's Eq 31 cost, flagged; moved to
-    // the middle of its cell, it carried level 2's fold a step early, and
-    // the barrier refit ended 1.4x above the fit). The same moves, with
-    // every other fold held inside its step cell (`move_folds_jointly`, as
-    // `reassign_jumps` does). (Only on every point: the race tries the
-    // least change in `u` instead.)
-    for (ci, c) in work.curves.iter().enumerate() {
-        if targets.iter().any(|t| t.0 == ci) {
-            continue;
-        }
-        let Some((wf, _)) = matches[ci].fold else {
-            continue;
-        };
-        if let Some((_, lo, hi)) = step_cell(c, wf) {
-            targets.push((ci, wf, 0.5 * (wf - lo).min(hi - wf)));
-        }
-    }
-    let Some(th) = move_folds_jointly(work, &best, &targets)? else {
-        return Ok(first);
-    };
-    let mut joint = best;
-    joint.spec = restarted(&joint.spec, &th);
-    joint.fit.theta = th;
-    refit_behind_barrier(setup, first, joint, work, iterations)
+    refit_behind_barrier(setup, best, moved, work, iterations)
 }
 
 /// `moved` (`best` with folds moved into measured step cells) refitted

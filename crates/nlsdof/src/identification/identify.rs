@@ -1659,11 +1659,11 @@ fn held_on_every_point(
     Ok(Some(keep_folds_off_steps(f, fit_data)?))
 }
 
-/// `alt`, a fit on every point of the standing fit's structure (no
-/// decision of its own to take), replaces the standing fit when it fits
-/// its noise and the standing fit does not, or, alike, when its objective
-/// is lower (by more than the noise explains with
-/// [`Lower::Significantly`]), as [`finish_and_adopt_if_better`] decides.
+/// `alt`, a fit on every point, replaces the standing fit when it fits its
+/// noise and the standing fit does not, or, alike, when its objective is
+/// lower as `lower` asks ([`replaces`]); the terms the standing fit found
+/// inactive that `alt` still lacks stay named. Returns whether it replaced
+/// the standing fit.
 fn adopt_if_better(
     (best, curves, adequacy): (&mut Fitted, &mut Vec<CurveReport>, &mut Adequacy),
     alt: Fitted,
@@ -1678,10 +1678,31 @@ fn adopt_if_better(
         &alt,
         best,
     )?;
-    if kept {
-        adopt((best, curves, adequacy), alt, judged);
+    if !kept {
+        return Ok(false);
     }
-    Ok(kept)
+    // terms `best` found inactive that `alt` still lacks stay named (at
+    // `alt`'s value of their exponent)
+    let mut alt = alt;
+    let index = |name: &str| PARAM_NAMES.iter().position(|n| *n == name);
+    for i in &best.fit.inactive {
+        let (Some(coef), Some(exp)) = (index(i.coefficient), index(i.exponent)) else {
+            continue;
+        };
+        let named = alt
+            .fit
+            .inactive
+            .iter()
+            .any(|a| a.coefficient == i.coefficient);
+        if alt.spec.status[coef] == Status::Absent && !named {
+            alt.fit.inactive.push(Inactive {
+                held_at: alt.fit.theta[exp],
+                ..*i
+            });
+        }
+    }
+    adopt((best, curves, adequacy), alt, judged);
+    Ok(true)
 }
 
 fn validate(plan: &FitPlan) -> Result<(), IdentifyError> {
@@ -2676,40 +2697,12 @@ fn finish_and_adopt_if_better(
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<bool, IdentifyError> {
     let mut alt_gain = *gain_test;
-    let mut alt = finish(setup, alt, fit_data, refine_data, &mut alt_gain, progress)?;
-    let judged = judge(fit_data, &alt);
-    let kept = replaces(
-        (judged.1.adequate, adequacy.adequate),
-        lower,
-        fit_data,
-        &alt,
-        best,
-    )?;
+    let alt = finish(setup, alt, fit_data, refine_data, &mut alt_gain, progress)?;
+    let kept = adopt_if_better((best, curves, adequacy), alt, fit_data, lower)?;
     if kept {
-        // terms `best` found inactive that `alt` still lacks stay named
-        // (at `alt`'s value of their exponent)
-        let index = |name: &str| PARAM_NAMES.iter().position(|n| *n == name);
-        for i in &best.fit.inactive {
-            let (Some(coef), Some(exp)) = (index(i.coefficient), index(i.exponent)) else {
-                continue;
-            };
-            let named = alt
-                .fit
-                .inactive
-                .iter()
-                .any(|a| a.coefficient == i.coefficient);
-            if alt.spec.status[coef] == Status::Absent && !named {
-                alt.fit.inactive.push(Inactive {
-                    held_at: alt.fit.theta[exp],
-                    ..*i
-                });
-            }
-        }
-        adopt((best, curves, adequacy), alt, judged);
         *gain_test = alt_gain;
-        return Ok(true);
     }
-    Ok(false)
+    Ok(kept)
 }
 
 /// `alt`, with its judgement (`judge`), replaces the result `(best,

@@ -1229,8 +1229,9 @@ fn stages(
         h.phase_shift -= winner_shift;
     }
     let race_winner = winner.clone();
-    // the held race's winner as it stands here (an escalation of its own
-    // starts from it; `None` once the stages read the data otherwise)
+    // the held race's winner as it stands here: an escalation of its own
+    // starts from it, while the stages still read the data as the race did
+    // (`conv_at_race`)
     let held_winner = held_alt.clone();
     let conv_at_race = ex.phase_conv;
     let mut gain_test = gain_test;
@@ -1660,30 +1661,28 @@ fn held_on_every_point(
 }
 
 /// `alt`, a fit on every point, replaces the standing fit when it fits its
-/// noise and the standing fit does not, or, alike, when its objective is
-/// lower as `lower` asks ([`replaces`]); the terms the standing fit found
+/// noise and the standing fit does not (never the other way round), or,
+/// alike, when its objective is lower as `lower` asks ([`lower_enough`]);
+/// the terms the standing fit found
 /// inactive that `alt` still lacks stay named. Returns whether it replaced
 /// the standing fit.
 fn adopt_if_better(
     (best, curves, adequacy): (&mut Fitted, &mut Vec<CurveReport>, &mut Adequacy),
-    alt: Fitted,
+    mut alt: Fitted,
     fit_data: &Dataset,
     lower: Lower,
 ) -> Result<bool, IdentifyError> {
     let judged = judge(fit_data, &alt);
-    let kept = replaces(
-        (judged.1.adequate, adequacy.adequate),
-        lower,
-        fit_data,
-        &alt,
-        best,
-    )?;
+    let kept = match (judged.1.adequate, adequacy.adequate) {
+        (true, false) => true,
+        (false, true) => false,
+        _ => lower_enough(lower, fit_data, &alt, best)?,
+    };
     if !kept {
         return Ok(false);
     }
     // terms `best` found inactive that `alt` still lacks stay named (at
     // `alt`'s value of their exponent)
-    let mut alt = alt;
     let index = |name: &str| PARAM_NAMES.iter().position(|n| *n == name);
     for i in &best.fit.inactive {
         let (Some(coef), Some(exp)) = (index(i.coefficient), index(i.exponent)) else {
@@ -2657,24 +2656,6 @@ fn lower_enough(
             alt.objective <= best.objective * (1.0 - MATERIAL_DROP)
                 || significantly_lower(data, alt, best)?
         }
-    })
-}
-
-/// Whether `alt` replaces the standing fit `best` on `data`: when it fits
-/// its noise and `best` does not (`adequate`: alt's, then best's), never
-/// the other way round, and, both alike, when its objective is lower as
-/// `lower` asks ([`lower_enough`]).
-fn replaces(
-    (alt_adequate, best_adequate): (bool, bool),
-    lower: Lower,
-    data: &Dataset,
-    alt: &Fitted,
-    best: &Fitted,
-) -> Result<bool, IdentifyError> {
-    Ok(match (alt_adequate, best_adequate) {
-        (true, false) => true,
-        (false, true) => false,
-        _ => lower_enough(lower, data, alt, best)?,
     })
 }
 

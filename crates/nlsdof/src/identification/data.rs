@@ -240,6 +240,40 @@ impl Dataset {
         self.len() == 0
     }
 
+    /// `f(index, curve)` for every curve, in parallel on the rayon pool,
+    /// the results in data order. The curves are started costliest first
+    /// (most steps, then highest level: the folds and their searches are at
+    /// the top levels), one curve per task, so that two cores finish
+    /// together instead of one waiting on the half of the curves that held
+    /// the top levels (rayon's even split of data order). Measured on the
+    /// 24 °C beam's generalised fit (6 × 1024 steps): the evaluations on every
+    /// point had used 1.68 of 2 cores. Each result is a function of its curve
+    /// alone, so the order changes no digit. The error returned is the one of
+    /// the first failing curve in data order (as a sequential map's).
+    pub(crate) fn map_curves<T, E, F>(&self, f: F) -> Result<Vec<T>, E>
+    where
+        T: Send,
+        E: Send,
+        F: Fn(usize, &Curve) -> Result<T, E> + Sync,
+    {
+        use rayon::prelude::*;
+        let mut order: Vec<usize> = (0..self.curves.len()).collect();
+        order.sort_by(|&i, &j| {
+            let (a, b) = (&self.curves[i], &self.curves[j]);
+            (b.omegas.len(), b.gamma)
+                .partial_cmp(&(a.omegas.len(), a.gamma))
+                .unwrap_or(std::cmp::Ordering::Equal)
+                .then(i.cmp(&j))
+        });
+        let mut done: Vec<(usize, Result<T, E>)> = order
+            .par_iter()
+            .with_max_len(1)
+            .map(|&i| (i, f(i, &self.curves[i])))
+            .collect();
+        done.sort_by_key(|(i, _)| *i);
+        done.into_iter().map(|(_, r)| r).collect()
+    }
+
     /// Distinct levels `(label, gamma)` in order of first appearance.
     pub fn levels(&self) -> Vec<(String, f64)> {
         let mut out: Vec<(String, f64)> = Vec::new();
@@ -320,6 +354,54 @@ mod tests {
             amplitudes: amplitudes.to_vec(),
             phases: None,
             weights: vec![1.0; n],
+        }
+    }
+
+    /// `map_curves` starts the curves in another order than the data's; its
+    /// results are a sequential map's (the oracle), in data order, and its
+    /// error is that of the first failing curve in data order, whatever the
+    /// thread count.
+    #[test]
+    fn map_curves_is_a_sequential_map_in_data_order() {
+        let curves: Vec<Curve> = (0..9)
+            .map(|k| {
+                let mut c = curve(SweepDirection::Up, &vec![1.0; 3 + (k * 7) % 5]);
+                c.gamma = 1.0 + (k * 4 % 9) as f64;
+                c.level = format!("L{k}");
+                c
+            })
+            .collect();
+        let data = Dataset { curves };
+        let f = |i: usize, c: &Curve| -> Result<(usize, String, usize), usize> {
+            if c.gamma > 7.5 || c.gamma == 5.0 {
+                Err(i)
+            } else {
+                Ok((i, c.level.clone(), c.omegas.len()))
+            }
+        };
+        let sequential: Result<Vec<_>, usize> = data
+            .curves
+            .iter()
+            .enumerate()
+            .map(|(i, c)| f(i, c))
+            .collect();
+        for threads in [1, 2, 5] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let got = pool.install(|| data.map_curves(f));
+            assert_eq!(got, sequential, "{threads} threads");
+            // (the first failing curve in data order is curve 1, γ 5)
+            assert_eq!(got, Err(1));
+            let ok = pool.install(|| data.map_curves(|i, c| Ok::<_, ()>((i, c.gamma))));
+            let expect: Vec<(usize, f64)> = data
+                .curves
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (i, c.gamma))
+                .collect();
+            assert_eq!(ok, Ok(expect));
         }
     }
 

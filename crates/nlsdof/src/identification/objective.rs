@@ -689,38 +689,34 @@ pub fn branch_response(
     theta: &Parameters,
     branch: ResponseBranch,
 ) -> Result<Vec<Vec<(f64, f64)>>, SolveError> {
-    use rayon::prelude::*;
     if branch != ResponseBranch::Nearest {
         return model_response(data, theta);
     }
     let model = normalised_model(theta);
-    data.curves
-        .par_iter()
-        .map(|c| {
-            let r = curve_response(&model, theta, c)?;
-            c.omegas
-                .iter()
-                .zip(&c.amplitudes)
-                .map(|(&w, &a_meas)| {
-                    let set = r.steady_states_near(w, a_meas)?;
-                    let distance = |a: f64| {
-                        if a_meas > 0.0 {
-                            (a / a_meas).ln().abs()
-                        } else {
-                            a
-                        }
-                    };
-                    let stable = set.roots.iter().any(|s| s.stable);
-                    Ok(set
-                        .roots
-                        .iter()
-                        .filter(|s| s.stable || !stable)
-                        .min_by(|x, y| distance(x.amplitude).total_cmp(&distance(y.amplitude)))
-                        .map_or((0.0, 0.0), |s| (s.amplitude, s.phase)))
-                })
-                .collect()
-        })
-        .collect()
+    data.map_curves(|_, c| {
+        let r = curve_response(&model, theta, c)?;
+        c.omegas
+            .iter()
+            .zip(&c.amplitudes)
+            .map(|(&w, &a_meas)| {
+                let set = r.steady_states_near(w, a_meas)?;
+                let distance = |a: f64| {
+                    if a_meas > 0.0 {
+                        (a / a_meas).ln().abs()
+                    } else {
+                        a
+                    }
+                };
+                let stable = set.roots.iter().any(|s| s.stable);
+                Ok(set
+                    .roots
+                    .iter()
+                    .filter(|s| s.stable || !stable)
+                    .min_by(|x, y| distance(x.amplitude).total_cmp(&distance(y.amplitude)))
+                    .map_or((0.0, 0.0), |s| (s.amplitude, s.phase)))
+            })
+            .collect()
+    })
 }
 
 /// As [`model_amplitudes`], with the model's phase lag (rad) at each step:
@@ -744,31 +740,27 @@ pub fn model_sweeps(
     data: &Dataset,
     theta: &Parameters,
 ) -> Result<Vec<(Vec<(f64, f64)>, FirstJump)>, SolveError> {
-    use rayon::prelude::*;
     let model = normalised_model(theta);
-    data.curves
-        .par_iter()
-        .map(|c| {
-            let r = curve_response(&model, theta, c)?;
-            let sw = r.sweep_from(&c.omegas, c.direction, first_amplitude(c))?;
-            let mut out: Vec<(f64, f64)> = sw
-                .points
-                .iter()
-                .map(|p| {
-                    if p.sticking {
-                        (0.0, 0.0)
-                    } else {
-                        (p.amplitude, p.phase)
-                    }
-                })
-                .collect();
-            if c.direction == SweepDirection::Down {
-                out.reverse();
-            }
-            let jump = sw.jumps.first().map(|j| (j.omega, j.amplitude_before));
-            Ok((out, jump))
-        })
-        .collect()
+    data.map_curves(|_, c| {
+        let r = curve_response(&model, theta, c)?;
+        let sw = r.sweep_from(&c.omegas, c.direction, first_amplitude(c))?;
+        let mut out: Vec<(f64, f64)> = sw
+            .points
+            .iter()
+            .map(|p| {
+                if p.sticking {
+                    (0.0, 0.0)
+                } else {
+                    (p.amplitude, p.phase)
+                }
+            })
+            .collect();
+        if c.direction == SweepDirection::Down {
+            out.reverse();
+        }
+        let jump = sw.jumps.first().map(|j| (j.omega, j.amplitude_before));
+        Ok((out, jump))
+    })
 }
 
 /// Wraps an angle to (−π, π] (kept here so that the objective does not

@@ -210,7 +210,6 @@ pub fn evaluate_measured(
     jacobian: bool,
     opts: &MatchOptions,
 ) -> Result<(Evaluation, Vec<CurveMatch>), SolveError> {
-    use rayon::prelude::*;
     let MatchOptions {
         phase_weight,
         censored,
@@ -219,33 +218,28 @@ pub fn evaluate_measured(
     } = *opts;
     let model = theta.normalised_model();
     let dc = DerivativeConstants::new(theta);
-    let per_curve: Vec<CurveOutput> = data
-        .curves
-        .par_iter()
-        .enumerate()
-        .map(|(ci, c)| {
-            let reading = if censored.get(ci).copied().unwrap_or(false) {
-                JumpReading::Censored
-            } else {
-                JumpReading::Exact
-            };
-            let r = ForcedResponse::from_normalised(
-                &model,
-                theta[GAIN] * c.gamma,
-                Formulation::HarmonicBalance,
-            )?;
-            curve_output(
-                &r,
-                theta,
-                &dc,
-                c,
-                reading,
-                jump_weight,
-                jacobian,
-                phase_weight,
-            )
-        })
-        .collect::<Result<_, SolveError>>()?;
+    let per_curve: Vec<CurveOutput> = data.map_curves(|ci, c| {
+        let reading = if censored.get(ci).copied().unwrap_or(false) {
+            JumpReading::Censored
+        } else {
+            JumpReading::Exact
+        };
+        let r = ForcedResponse::from_normalised(
+            &model,
+            theta[GAIN] * c.gamma,
+            Formulation::HarmonicBalance,
+        )?;
+        curve_output(
+            &r,
+            theta,
+            &dc,
+            c,
+            reading,
+            jump_weight,
+            jacobian,
+            phase_weight,
+        )
+    })?;
     let n = data.len();
     let mut model_a = Vec::with_capacity(n);
     let mut residuals = Vec::with_capacity(n + data.curves.len());

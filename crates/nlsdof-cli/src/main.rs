@@ -8,14 +8,6 @@ use clap::{Parser, Subcommand};
 use error::CliError;
 use std::io::Write;
 
-/// mimalloc instead of the system allocator: the fits' sweeps allocate
-/// small vectors (roots, hints, power-sum derivatives) at every step, and
-/// the system allocator took about 9 % of the CPU of a beam fit. Measured
-/// on the generalised fit of the 24 °C beam (docs/identification.md,
-/// "Speed"): the same fit bit for bit, 9 % less CPU, 7 % less wall clock.
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
 /// Nonlinear SDoF power-law models: m x'' + c x' + k x + c_e x'|x'|^eta + k_r x|x|^rho = m gamma(t).
 ///
 /// All quantities are SI. Input levels (gamma, m/s^2) and amplitudes (m) are

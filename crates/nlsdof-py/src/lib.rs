@@ -7,13 +7,6 @@
 //! built by `nlsdof-report`, so both give the same keys and numbers. Every
 //! library error becomes a `ValueError` carrying the CLI's one-line message.
 
-/// The CLI's allocator (see `nlsdof-cli`'s `main.rs`): the fits allocate
-/// small vectors at every step of every sweep, and the system allocator took
-/// about 9 % of a beam fit's CPU. Rust's allocations only; Python's objects
-/// keep Python's allocator.
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
 mod arrays;
 mod convert;
 mod document;

@@ -16,11 +16,6 @@ use nlsdof::identification::*;
 use nlsdof::SweepDirection;
 use std::time::Duration;
 
-/// The allocator of the `nlsdof` CLI and the Python package, so that the
-/// figures are those users get (the core library sets none).
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
 fn truth() -> Parameters {

@@ -992,6 +992,34 @@ fn a_freed_gain_near_one_that_does_not_fit_escalates_again_held() {
     assert_tried(&id, "with the gain held at 1");
 }
 
+/// Blind h018-mixed of seed 2811280612 (`blind_suite.py`: one level swept
+/// up, 200 steps, no phase, ρ 5.64, η 2.67): the equation-error screen
+/// freed the gain at 282 (F = 3.6e4), so its landscape's minima were those
+/// of a free gain and no held race ran; the fit ended at ρ 10 (its bound),
+/// κ removed, gain 0.72, 1715x the noise and 2202x the truth's Eq 31 cost
+/// (flagged). The escalation again with the gain held, from the same
+/// landscape's nodes, stayed in that basin (ρ 10, 2.11e-6 against the
+/// truth's 9.6e-10). With the gain fixed at 1 the default stages reach
+/// 0.996x. Now a held race that runs only for this escalation takes its
+/// nodes from the landscape with the gain held at 1, and its winner goes
+/// through the stages when the escalation finds nothing lower; a misfit
+/// beyond 20x the noise gets it too (without the exponent profile).
+#[test]
+fn a_held_gain_escalation_races_the_held_landscape() {
+    let data = blind_set(include_str!(
+        "data/blind_h018_mixed_gain_held_landscape.csv"
+    ));
+    let truth = physical_truth(
+        0.10891047792170103,
+        [66816.48215061713, 0.2550193349466572, 1.1388602645733163e24],
+        [5.6426726065696, 2.465969611475018, 2.667934792959242],
+    );
+    let (id, ratio) = fit_as_the_suite_runs(&data, &truth);
+    assert!(ratio <= 1.05, "cost/truth {ratio}");
+    assert_trusted(&id);
+    assert_tried(&id, "with the gain held at 1");
+}
+
 /// Blind h008-hardening of random seed 233097205 (`blind_suite.py`: one
 /// level swept up, 300 steps, no phase, ρ = 4.92, no nonlinear damping):
 /// the fit converged within the noise at ρ 4.772 ± 0.049, 1.056x the

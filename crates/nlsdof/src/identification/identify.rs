@@ -108,7 +108,11 @@
 //!    [`ESCALATION_STARTS`], then each exponent held across its range
 //!    (`profile_exponents`, started from the fit and from the landscape;
 //!    a term stage 5 removed is restored and profiled too);
-//!    a lower objective goes through stages 5–7 again. If it still does
+//!    a lower objective goes through stages 5–7 again. A fit whose gain
+//!    was freed near 1 ([`HELD_RACE_GAIN`]) and that still does not fit
+//!    gets the escalation again with the gain held at 1, from the held
+//!    race (raced then, on the landscape with the gain held, if the
+//!    screen's free gain was far from 1). If it still does
 //!    not fit, the result says so ([`Adequacy`],
 //!    [`Identification::warning`]). A fit within its noise but above
 //!    [`PROFILE_NEAR_NOISE`] of it, or whose gain the decisions freed (a
@@ -1281,11 +1285,19 @@ fn stages(
         }
     }
     // A gain freed near 1 (`HELD_RACE_GAIN`) on a fit that still does not
-    // fit its noise after the escalation, though within
-    // `PROFILE_MAX_RATIO` of it: the escalation again, from the race with
-    // the gain held at 1 (run now if the screen's free gain was far from 1),
-    // and its result through the stages beside the standing fit
-    // (`finish_alternative`). A free gain absorbs the misfit of another
+    // fit its noise after the escalation: the escalation again (with the
+    // exponent profile within `PROFILE_MAX_RATIO` of the noise), from the
+    // race with the gain held at 1, and its result through the stages
+    // beside the standing fit (`finish_alternative`). When the screen's free
+    // gain was far from 1 that race has not run: it runs now, on the nodes
+    // of the landscape with the gain held (`explore_held`; the screen's
+    // landscape has the minima of its free gain), and its winner goes
+    // through the stages when the escalation finds nothing lower (measured:
+    // blind h018-mixed of seed 2811280612, one level up, no phase, ρ 5.64,
+    // η 2.67: the screen freed the gain at 282, the fit ended at ρ 10, its
+    // bound, gain 0.72, 1715x the noise and 2202x the truth's Eq 31 cost,
+    // flagged; a held race on the screen's nodes stayed at ρ 10; now
+    // 0.996x). A free gain absorbs the misfit of another
     // basin, and the held race's winner alone, carried through the stages,
     // can stay in one (measured: blind h025-mixed of seed 2711280113, one
     // level up and down, no phase, ρ 4.12, η 2.85: the screen freed the
@@ -1293,25 +1305,29 @@ fn stages(
     // the gain 1.041, 2.3x the noise and 1.685x the truth's Eq 31 cost,
     // flagged; the held race's winner, η 5.84, ended 1.9x the noise and
     // above it; the default stages with the gain fixed at 1 reach 1.006x.)
-    // (Beams: their gains, 2.3–3.1 or 0.13, and misfits, 37x the noise and
-    // more, leave this out.)
+    // (Beams leave this out: their freed gains are 2.3–3.1 or 0.13; the six
+    // beam fits are byte-identical with and without this step.)
     let gain_near_one = best.spec.status[GAIN] == Status::Free
         && best.fit.theta[GAIN].ln().abs() <= HELD_RACE_GAIN.ln();
     if plan.escalate
         && plan.gain == GainChoice::Auto
         && gain_near_one
         && !adequacy.adequate
-        && adequacy.ratio <= PROFILE_MAX_RATIO
         && ex.phase_conv == conv_at_race
     {
-        let (first, list) = match (held_winner, held_raced) {
-            (Some(w), Some(l)) => (w, l),
+        // (`finished`: the held race's winner went through the stages
+        // beside the free one already)
+        let (first, list, held_ex, finished) = match (held_winner, held_raced) {
+            (Some(w), Some(l)) => (w, l, None, true),
             _ => {
+                let held_ex = explore_held(&setup, &ex, progress)?;
+                cancel.check()?;
+                let held_nodes = candidate_nodes(&held_ex.land, plan.refine.max(1));
                 let (more, w, trials, l) = race(
                     &setup,
-                    &ex,
+                    &held_ex,
                     &refine_data,
-                    &nodes,
+                    &held_nodes,
                     Status::Fixed(1.0),
                     &signs,
                     &[],
@@ -1321,16 +1337,17 @@ fn stages(
                 cancel.check()?;
                 candidates.extend(more);
                 merge_sign_trials(&mut sign_trials, trials);
-                (w, l)
+                (w, l, Some(held_ex), false)
             }
         };
         let held = Status::Fixed(1.0);
+        let profile = adequacy.ratio <= PROFILE_MAX_RATIO;
         let (alt, tried, more) = escalate(
             &setup,
-            &ex,
+            held_ex.as_ref().unwrap_or(&ex),
             &refine_data,
             held,
-            (&first, true),
+            (&first, profile),
             &list,
             progress,
         )?;
@@ -1341,7 +1358,14 @@ fn stages(
         adequacy.escalation.push(format!(
             "the same {n} steps with the gain held at 1 (the free gain's fit did not fit)"
         ));
-        if let Some(alt) = alt.filter(|a| a.objective < first.objective * (1.0 - 1e-6)) {
+        // the escalation's result, or the held race's winner when that has
+        // not been through the stages yet
+        let first_objective = first.objective;
+        let alt = match alt.filter(|a| a.objective < first_objective * (1.0 - 1e-6)) {
+            Some(a) => Some(a),
+            None => (!finished).then_some(first),
+        };
+        if let Some(alt) = alt {
             let datas = (&mut fit_data, &mut refine_data, &mut ex.phase_conv);
             let result = (&mut best, &mut curves, &mut adequacy, &mut gain_test);
             finish_alternative(&setup, alt, datas, result, progress)?;
@@ -1833,6 +1857,50 @@ fn explore(
         land,
         best_ee,
         phase_conv,
+    })
+}
+
+/// The landscape with the gain held at 1 (`--fix gain=1`'s), read with
+/// `ex`'s phase convention: the nodes of a held race when the screen's
+/// free gain was far from 1 and its landscape's minima are those of that
+/// gain (`stages`, the held escalation).
+fn explore_held(
+    setup: &Setup,
+    ex: &Exploration,
+    progress: &(dyn Fn(IdentifyProgress) + Sync),
+) -> Result<Exploration, IdentifyError> {
+    let step = || progress(IdentifyProgress::Step);
+    let (rho_axis, eta_axis) = (setup.rho_axis, setup.eta_axis);
+    progress(IdentifyProgress::Stage {
+        name: "landscape, gain held at 1",
+        steps: eta_axis.n.max(1),
+    });
+    let t = Terms {
+        gain: Some(1.0),
+        ..setup.terms_free
+    };
+    let cancel = setup.plan.lm.cancel;
+    let land = landscape_cancellable(
+        &setup.prep,
+        t,
+        rho_axis,
+        eta_axis,
+        setup.phase_mode,
+        &step,
+        cancel,
+    )
+    .map_err(|e| match e {
+        LandscapeError::Interrupted(i) => i.into(),
+        e => IdentifyError::from(e),
+    })?;
+    let (bi, bj) = land
+        .best()
+        .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
+    let best_ee = land.fit_at(bi, bj).expect("best node solved").clone();
+    Ok(Exploration {
+        land,
+        best_ee,
+        phase_conv: ex.phase_conv,
     })
 }
 

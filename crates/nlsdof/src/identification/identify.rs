@@ -1831,33 +1831,48 @@ fn explore(
         Ok(l) => l,
         Err(LandscapeError::Interrupted(i)) => return Err(i.into()),
         Err(e) if setup.plan.gain == GainChoice::Auto => {
-            let t = Terms {
-                gain: Some(1.0),
-                ..setup.terms_free
-            };
-            progress(IdentifyProgress::Stage {
-                name: "landscape",
-                steps: eta_axis.n.max(1),
-            });
-            let phase = setup.phase_mode;
-            landscape_cancellable(&setup.prep, t, rho_axis, eta_axis, phase, &step, cancel)
-                .map_err(|e2| match e2 {
-                    LandscapeError::Interrupted(i) => i.into(),
-                    _ => IdentifyError::from(e),
-                })?
+            held_landscape(setup, "landscape", progress).map_err(|e2| match e2 {
+                LandscapeError::Interrupted(i) => i.into(),
+                _ => IdentifyError::from(e),
+            })?
         }
         Err(e) => return Err(e.into()),
     };
-    let (bi, bj) = land
-        .best()
-        .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
-    let best_ee = land.fit_at(bi, bj).expect("best node solved").clone();
+    let best_ee = best_node(&land)?;
     let phase_conv = best_ee.phase;
     Ok(Exploration {
         land,
         best_ee,
         phase_conv,
     })
+}
+
+/// The landscape with the gain held at 1 (stage `name` in the progress).
+fn held_landscape(
+    setup: &Setup,
+    name: &'static str,
+    progress: &(dyn Fn(IdentifyProgress) + Sync),
+) -> Result<Landscape, LandscapeError> {
+    let step = || progress(IdentifyProgress::Step);
+    let (rho_axis, eta_axis) = (setup.rho_axis, setup.eta_axis);
+    progress(IdentifyProgress::Stage {
+        name,
+        steps: eta_axis.n.max(1),
+    });
+    let t = Terms {
+        gain: Some(1.0),
+        ..setup.terms_free
+    };
+    let (phase, cancel) = (setup.phase_mode, setup.plan.lm.cancel);
+    landscape_cancellable(&setup.prep, t, rho_axis, eta_axis, phase, &step, cancel)
+}
+
+/// The equation-error fit at the landscape's best node.
+fn best_node(land: &Landscape) -> Result<EquationErrorFit, IdentifyError> {
+    let (bi, bj) = land
+        .best()
+        .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
+    Ok(land.fit_at(bi, bj).expect("best node solved").clone())
 }
 
 /// The landscape with the gain held at 1 (`--fix gain=1`'s), read with
@@ -1869,34 +1884,12 @@ fn explore_held(
     ex: &Exploration,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
 ) -> Result<Exploration, IdentifyError> {
-    let step = || progress(IdentifyProgress::Step);
-    let (rho_axis, eta_axis) = (setup.rho_axis, setup.eta_axis);
-    progress(IdentifyProgress::Stage {
-        name: "landscape, gain held at 1",
-        steps: eta_axis.n.max(1),
-    });
-    let t = Terms {
-        gain: Some(1.0),
-        ..setup.terms_free
-    };
-    let cancel = setup.plan.lm.cancel;
-    let land = landscape_cancellable(
-        &setup.prep,
-        t,
-        rho_axis,
-        eta_axis,
-        setup.phase_mode,
-        &step,
-        cancel,
-    )
-    .map_err(|e| match e {
-        LandscapeError::Interrupted(i) => i.into(),
-        e => IdentifyError::from(e),
-    })?;
-    let (bi, bj) = land
-        .best()
-        .ok_or_else(|| IdentifyError::NoCandidate("empty landscape".into()))?;
-    let best_ee = land.fit_at(bi, bj).expect("best node solved").clone();
+    let land =
+        held_landscape(setup, "landscape, gain held at 1", progress).map_err(|e| match e {
+            LandscapeError::Interrupted(i) => i.into(),
+            e => IdentifyError::from(e),
+        })?;
+    let best_ee = best_node(&land)?;
     Ok(Exploration {
         land,
         best_ee,

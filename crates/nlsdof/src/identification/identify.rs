@@ -1320,12 +1320,16 @@ fn stages(
         let (first, list, held_ex, finished) = match (held_winner, held_raced) {
             (Some(w), Some(l)) => (w, l, None, true),
             _ => {
+                // (the screen's landscape when the held one cannot be had)
                 let held_ex = explore_held(&setup, &ex, progress)?;
                 cancel.check()?;
-                let held_nodes = candidate_nodes(&held_ex.land, plan.refine.max(1));
+                let (race_ex, held_nodes) = match &held_ex {
+                    Some(h) => (h, candidate_nodes(&h.land, plan.refine.max(1))),
+                    None => (&ex, nodes.clone()),
+                };
                 let (more, w, trials, l) = race(
                     &setup,
-                    &held_ex,
+                    race_ex,
                     &refine_data,
                     &held_nodes,
                     Status::Fixed(1.0),
@@ -1337,7 +1341,7 @@ fn stages(
                 cancel.check()?;
                 candidates.extend(more);
                 merge_sign_trials(&mut sign_trials, trials);
-                (w, l, Some(held_ex), false)
+                (w, l, held_ex, false)
             }
         };
         let held = Status::Fixed(1.0);
@@ -1878,23 +1882,27 @@ fn best_node(land: &Landscape) -> Result<EquationErrorFit, IdentifyError> {
 /// The landscape with the gain held at 1 (`--fix gain=1`'s), read with
 /// `ex`'s phase convention: the nodes of a held race when the screen's
 /// free gain was far from 1 and its landscape's minima are those of that
-/// gain (`stages`, the held escalation).
+/// gain (`stages`, the held escalation). `None` when that landscape cannot
+/// be solved or is empty (the step is then an extra try, not a reason to
+/// fail the fit); an interruption is returned.
 fn explore_held(
     setup: &Setup,
     ex: &Exploration,
     progress: &(dyn Fn(IdentifyProgress) + Sync),
-) -> Result<Exploration, IdentifyError> {
-    let land =
-        held_landscape(setup, "landscape, gain held at 1", progress).map_err(|e| match e {
-            LandscapeError::Interrupted(i) => i.into(),
-            e => IdentifyError::from(e),
-        })?;
-    let best_ee = best_node(&land)?;
-    Ok(Exploration {
+) -> Result<Option<Exploration>, IdentifyError> {
+    let land = match held_landscape(setup, "landscape, gain held at 1", progress) {
+        Ok(l) => l,
+        Err(LandscapeError::Interrupted(i)) => return Err(i.into()),
+        Err(_) => return Ok(None),
+    };
+    let Ok(best_ee) = best_node(&land) else {
+        return Ok(None);
+    };
+    Ok(Some(Exploration {
         land,
         best_ee,
         phase_conv: ex.phase_conv,
-    })
+    }))
 }
 
 /// The equation error at node `(ρ, η)` with the gain held at `g`.

@@ -630,7 +630,6 @@ pub fn sweeps_at_data(
     input_gain: f64,
     data: &Dataset,
 ) -> Result<Vec<crate::LevelResponse>, SolveError> {
-    use rayon::prelude::*;
     if !(input_gain.is_finite() && input_gain > 0.0) {
         return Err(crate::ParameterError::NotPositive {
             name: "input_gain",
@@ -639,25 +638,21 @@ pub fn sweeps_at_data(
         .into());
     }
     let model = model.as_normalised()?;
-    data.curves
-        .par_iter()
-        .map(|c| {
-            let response = ForcedResponse::from_normalised(
-                &model,
-                input_gain * c.gamma,
-                Formulation::HarmonicBalance,
-            )?;
-            let sweep =
-                response.sweep_from(&c.omegas, c.direction, objective::first_amplitude(c))?;
-            let phase_quadrature = response.phase_quadrature()?;
-            Ok(crate::LevelResponse {
-                gamma: c.gamma,
-                response,
-                sweep,
-                phase_quadrature,
-            })
+    data.map_curves(|_, c| {
+        let response = ForcedResponse::from_normalised(
+            &model,
+            input_gain * c.gamma,
+            Formulation::HarmonicBalance,
+        )?;
+        let sweep = response.sweep_from(&c.omegas, c.direction, objective::first_amplitude(c))?;
+        let phase_quadrature = response.phase_quadrature()?;
+        Ok(crate::LevelResponse {
+            gamma: c.gamma,
+            response,
+            sweep,
+            phase_quadrature,
         })
-        .collect()
+    })
 }
 
 /// One row of the phase-quadrature table (Table 8 analogue).

@@ -2,7 +2,8 @@
 //! equation-error stage on 5 levels × 200 points (≤ 1 ms), a 64 × 64
 //! exponent landscape (≤ 0.5 s on 2 cores), the default fit of a beam set
 //! (≤ 2 s; skipped when ../shared is absent) and of 1,000,000 data rows
-//! (≤ 10 s). Figures: docs/identification.md, "Speed".
+//! (≤ 10 s). Figures: docs/identification.md, "Speed". Each fit starts with
+//! an empty sweep memo (`recent_sweeps::forget`): a first fit is measured.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -88,7 +89,10 @@ fn bench(c: &mut Criterion) {
     });
     g.sample_size(10).measurement_time(Duration::from_secs(20));
     g.bench_function("default_fit_generalised_5x200", |b| {
-        b.iter(|| identify(&d, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap())
+        b.iter(|| {
+            recent_sweeps::forget();
+            identify(&d, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap()
+        })
     });
     // the clamped-clamped beam (real data), if the shared data are present
     let beam = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -96,7 +100,10 @@ fn bench(c: &mut Criterion) {
     if let Ok(d) = read_beam(&beam) {
         for kind in [ModelKind::Duffing, ModelKind::Generalised] {
             g.bench_function(format!("default_fit_beam_24C_{kind}"), |b| {
-                b.iter(|| identify(&d, &FitPlan::new(kind), &|_| {}).unwrap())
+                b.iter(|| {
+                    recent_sweeps::forget();
+                    identify(&d, &FitPlan::new(kind), &|_| {}).unwrap()
+                })
             });
         }
     }
@@ -104,7 +111,10 @@ fn bench(c: &mut Criterion) {
     let big = data(&th, 10, 100_000);
     g.sample_size(10).measurement_time(Duration::from_secs(60));
     g.bench_function("default_fit_generalised_1e6_rows", |b| {
-        b.iter(|| identify(&big, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap())
+        b.iter(|| {
+            recent_sweeps::forget();
+            identify(&big, &FitPlan::new(ModelKind::Generalised), &|_| {}).unwrap()
+        })
     });
     g.finish();
 }

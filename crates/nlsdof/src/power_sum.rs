@@ -47,10 +47,18 @@
 /// merged, zero coefficients dropped.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PowerSum {
-    exponents: Vec<f64>,
-    coefficients: Vec<f64>,
-    log_abs: Vec<f64>,
+    exponents: Terms,
+    coefficients: Terms,
+    log_abs: Terms,
 }
+
+/// The terms' numbers, inline up to [`INLINE_TERMS`] (the response
+/// equation has at most 6 terms; its fold search builds and drops several
+/// sums, and their reduced derivatives, at every step of a sweep).
+type Terms = smallvec::SmallVec<[f64; INLINE_TERMS]>;
+
+/// Terms a [`PowerSum`] holds without a heap allocation.
+const INLINE_TERMS: usize = 8;
 
 /// A function used for sign tests and root polishing in place of the
 /// expanded sum (same sign as the sum for every `t`).
@@ -137,8 +145,8 @@ impl PowerSum {
     /// From terms sorted by exponent: equal exponents merged in order, zero
     /// coefficients dropped.
     fn from_sorted(terms: impl IntoIterator<Item = (f64, f64)>, capacity: usize) -> Self {
-        let mut exponents: Vec<f64> = Vec::with_capacity(capacity);
-        let mut coefficients: Vec<f64> = Vec::with_capacity(capacity);
+        let mut exponents = Terms::with_capacity(capacity);
+        let mut coefficients = Terms::with_capacity(capacity);
         for (e, c) in terms {
             if exponents.last() == Some(&e) {
                 *coefficients.last_mut().unwrap() += c;

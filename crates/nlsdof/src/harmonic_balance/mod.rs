@@ -95,6 +95,59 @@ pub struct SteadyState {
     pub stable: bool,
 }
 
+/// The stable steady states at every step of a sweep
+/// ([`ForcedResponse::sweep_with_states`]), in sweep order, kept in one
+/// allocation (a sweep of a thousand steps would otherwise allocate a
+/// thousand small vectors).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepStates {
+    states: Vec<SteadyState>,
+    /// `states[ends[k − 1]..ends[k]]` are step `k`'s.
+    ends: Vec<usize>,
+}
+
+impl StepStates {
+    /// The stable states at step `k` (sweep order; the followed one among
+    /// them; empty where the mass sticks or no stable state exists).
+    pub fn at(&self, k: usize) -> &[SteadyState] {
+        let start = if k == 0 { 0 } else { self.ends[k - 1] };
+        &self.states[start..self.ends[k]]
+    }
+
+    /// Number of steps.
+    pub fn len(&self) -> usize {
+        self.ends.len()
+    }
+
+    /// `true` before the first step.
+    pub fn is_empty(&self) -> bool {
+        self.ends.is_empty()
+    }
+
+    /// Every step's states, in sweep order.
+    pub fn iter(&self) -> impl Iterator<Item = &[SteadyState]> + '_ {
+        (0..self.len()).map(|k| self.at(k))
+    }
+
+    pub(crate) fn with_capacity(steps: usize) -> Self {
+        Self {
+            states: Vec::with_capacity(steps + steps / 4),
+            ends: Vec::with_capacity(steps),
+        }
+    }
+
+    pub(crate) fn clear(&mut self) {
+        self.states.clear();
+        self.ends.clear();
+    }
+
+    /// Appends the next step's states.
+    pub(crate) fn push_step(&mut self, states: impl IntoIterator<Item = SteadyState>) {
+        self.states.extend(states);
+        self.ends.push(self.states.len());
+    }
+}
+
 /// Why no steady-state motion exists.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NoMotion {
@@ -435,8 +488,8 @@ impl ForcedResponse {
     }
 
     /// As [`ForcedResponse::sweep_from`], with every **stable** steady state
-    /// at each step (in sweep order, the followed one among them; empty
-    /// where the mass sticks or no stable state exists). The sweep isolates
+    /// at each step ([`StepStates::at`]: in sweep order, the followed one
+    /// among them; empty where the mass sticks or no stable state exists). The sweep isolates
     /// these roots anyway wherever a fold is possible (at certified steps
     /// the one root is the state), so they come at no extra cost; the
     /// output error of the identification compares a measured point with
@@ -446,8 +499,8 @@ impl ForcedResponse {
         omegas: &[f64],
         direction: SweepDirection,
         initial_amplitude: f64,
-    ) -> Result<(Sweep, Vec<Vec<SteadyState>>), SolveError> {
-        let mut states = Vec::with_capacity(omegas.len());
+    ) -> Result<(Sweep, StepStates), SolveError> {
+        let mut states = StepStates::with_capacity(omegas.len());
         let sw = sweep::sweep(
             self,
             omegas,

@@ -104,7 +104,7 @@ pub(crate) fn sweep(
     omegas: &[f64],
     dir: SweepDirection,
     initial: Option<f64>,
-    states: Option<&mut Vec<Vec<SteadyState>>>,
+    states: Option<&mut StepStates>,
 ) -> Result<Sweep, SolveError> {
     validate_omegas(omegas)?;
     if let Some(a) = initial {
@@ -141,13 +141,13 @@ pub(crate) fn sweep(
             if let Some(st) = states {
                 // one root per step (certified)
                 st.clear();
-                st.extend(points.iter().map(|p| {
-                    vec![SteadyState {
+                for p in &points {
+                    st.push_step([SteadyState {
                         amplitude: p.amplitude,
                         phase: p.phase,
                         stable: p.stable,
-                    }]
-                }));
+                    }]);
+                }
             }
             return Ok(Sweep {
                 direction: dir,
@@ -324,7 +324,7 @@ fn general_sweep(
     eqs: &[ResponseEquation],
     unique: &[bool],
     initial: Option<f64>,
-    mut states: Option<&mut Vec<Vec<SteadyState>>>,
+    mut states: Option<&mut StepStates>,
 ) -> Result<Sweep, SolveError> {
     if let Some(st) = states.as_deref_mut() {
         st.clear();
@@ -426,7 +426,7 @@ fn general_sweep(
             if let Some(p) = unique_root(r, &eqs[i], w, prev_x) {
                 rank = Some(0);
                 if let Some(st) = states.as_deref_mut() {
-                    st.push(vec![SteadyState {
+                    st.push_step([SteadyState {
                         amplitude: p.amplitude,
                         phase: p.phase,
                         stable: p.stable,
@@ -443,7 +443,7 @@ fn general_sweep(
         };
         let roots = set.roots;
         if let Some(st) = states.as_deref_mut() {
-            st.push(roots.iter().filter(|s| s.stable).copied().collect());
+            st.push_step(roots.iter().filter(|s| s.stable).copied());
         }
         if roots.is_empty() {
             points.push(sticking_point(w, set.no_motion));

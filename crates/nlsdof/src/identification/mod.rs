@@ -9,6 +9,8 @@
 //!   Jacobian by implicit differentiation, the optimisation variables.
 //! * [`levenberg_marquardt`] — bounded LM (the local solver).
 //! * [`global`] — seeded parallel multistart.
+//! * [`recent_sweeps`] — the last model sweeps of the output error, so that
+//!   an evaluation repeated at the same θ does not sweep again.
 //! * [`uncertainty`] — standard errors, 95 % intervals, correlations.
 //! * [`search`] — the stiffness sign and integer exponents, chosen by
 //!   fitting each candidate and keeping the lowest cost.
@@ -40,6 +42,7 @@ pub mod output_error;
 pub mod parameters;
 pub mod phase_resonance;
 pub mod profile;
+pub mod recent_sweeps;
 pub mod search;
 pub mod time_domain;
 pub mod uncertainty;

@@ -69,7 +69,7 @@
 use super::data::{Curve, Dataset};
 use super::jumps::{fold_derivatives, fold_frequency_derivatives};
 use super::models::*;
-use super::objective::{first_amplitude, DerivativeConstants, Evaluation};
+use super::objective::{DerivativeConstants, Evaluation};
 use super::parameters::Parameters;
 use crate::error::SolveError;
 use crate::harmonic_balance::{ForcedResponse, Formulation, SweepDirection};
@@ -424,7 +424,10 @@ fn curve_output(
     phase_weight: Option<f64>,
 ) -> Result<CurveOutput, SolveError> {
     let n = c.omegas.len();
-    let (sw, states) = r.sweep_with_states(&c.omegas, c.direction, first_amplitude(c))?;
+    // (from memory when this sweep was one of the recent ones: a function
+    // of the model, the level and the curve only)
+    let swept = super::recent_sweeps::sweep_with_states(r, c)?;
+    let (sw, states) = (&swept.0, &swept.1);
     let sgn = match c.direction {
         SweepDirection::Up => 1.0,
         SweepDirection::Down => -1.0,
@@ -545,7 +548,7 @@ fn curve_output(
             }
         } else {
             // case 2: another stable state before the fold
-            for s in &states[k] {
+            for s in states.at(k) {
                 if (s.amplitude - sweep_a).abs() <= 1e-12 * sweep_a.max(f64::MIN_POSITIVE) {
                     continue;
                 }

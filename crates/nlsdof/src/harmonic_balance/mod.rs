@@ -666,3 +666,58 @@ pub(crate) fn test_uniform(seed: u64) -> impl FnMut() -> f64 {
         (state >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+#[cfg(test)]
+mod step_states_tests {
+    use super::*;
+
+    /// The oracle is the cold root isolation at each frequency
+    /// ([`ForcedResponse::steady_states`]): a sweep's states at a step are
+    /// its stable roots, as many and the same to 1e-12, and the followed
+    /// point is one of them. Up and down, through the jumps of a Duffing
+    /// level, so that steps with one and with two stable states are read
+    /// back from the one allocation.
+    #[test]
+    fn a_sweeps_states_are_the_stable_roots_at_each_step() {
+        let m = NormalisedModel {
+            alpha: 100.0,
+            delta: 0.1,
+            beta: 40.0,
+            rho: 2.0,
+            kappa: 0.0,
+            eta: 0.0,
+        };
+        let r = ForcedResponse::from_normalised(&m, 1.0, Formulation::HarmonicBalance).unwrap();
+        let omegas: Vec<f64> = (0..300).map(|i| 9.0 + 4.0 * i as f64 / 299.0).collect();
+        for dir in [SweepDirection::Up, SweepDirection::Down] {
+            let (sw, states) = r.sweep_with_states(&omegas, dir, 0.0).unwrap();
+            assert!(
+                !sw.jumps.is_empty(),
+                "{dir:?}: a sweep with a jump is tested"
+            );
+            assert_eq!(states.len(), omegas.len());
+            assert_eq!(states.iter().count(), omegas.len());
+            let mut two = 0;
+            for (k, p) in sw.points.iter().enumerate() {
+                let cold: Vec<SteadyState> = r
+                    .steady_states(p.omega)
+                    .unwrap()
+                    .roots
+                    .into_iter()
+                    .filter(|s| s.stable)
+                    .collect();
+                let at = states.at(k);
+                assert_eq!(at.len(), cold.len(), "{dir:?} step {k}");
+                for (a, b) in at.iter().zip(&cold) {
+                    assert!((a.amplitude - b.amplitude).abs() <= 1e-12 * b.amplitude);
+                }
+                assert!(
+                    at.iter().any(|s| s.amplitude == p.amplitude),
+                    "{dir:?} step {k}"
+                );
+                two += usize::from(at.len() == 2);
+            }
+            assert!(two > 0, "{dir:?}: steps with two stable states are tested");
+        }
+    }
+}

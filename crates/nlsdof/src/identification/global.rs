@@ -88,9 +88,9 @@ const MIN_RUNS: usize = 4;
 /// beam's default generalised fit (2026-11-28): the three relaxed runs all
 /// started at 4.66e-4 against the zero model's 3.28e-4, and ended at
 /// 3.28e-4, 3.28e-4 and 3.33e-4 (the run from the data-derived start ended
-/// at 5.5e-6); they took 0.1 s of the 2.4 s fit. The in-family suites and
-/// three blind runs of 60 are fit for fit the same without them
-/// (docs/identification.md, "Speed").
+/// at 5.5e-6); they took 0.1 s of the 2.4 s fit. Without them the
+/// in-family suites' counts are unchanged and five blind runs of 60 are fit
+/// for fit the same (docs/identification.md, "Speed").
 const RELAX_LIMIT: f64 = 2.0;
 
 /// GlobalSearch-style multistart (MATLAB's GlobalSearch, simplified).

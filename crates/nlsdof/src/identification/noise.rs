@@ -290,14 +290,21 @@ fn objective_scale(c: &Curve) -> Vec<f64> {
 /// The [`NoiseModel`] of `residuals` (an objective's residual vector on
 /// `data`; `with_phase` when it holds phase residuals).
 pub fn noise_model(data: &Dataset, residuals: &[f64], with_phase: bool) -> NoiseModel {
+    use rayon::prelude::*;
     let lay = layout(data, with_phase);
-    let mut amplitude = Vec::with_capacity(data.curves.len());
-    let mut phase = Vec::with_capacity(data.curves.len());
-    for (c, &(a, p, n)) in data.curves.iter().zip(&lay) {
-        let scale = objective_scale(c);
-        amplitude.push(local_noise_scaled(&c.omegas, &residuals[a..a + n], &scale));
-        phase.push(p.map(|p| local_noise_scaled(&c.omegas, &residuals[p..p + n], &scale)));
-    }
+    // (the curves in parallel: each curve's estimate is its own)
+    let (amplitude, phase) = data
+        .curves
+        .par_iter()
+        .zip(&lay)
+        .map(|(c, &(a, p, n))| {
+            let scale = objective_scale(c);
+            (
+                local_noise_scaled(&c.omegas, &residuals[a..a + n], &scale),
+                p.map(|p| local_noise_scaled(&c.omegas, &residuals[p..p + n], &scale)),
+            )
+        })
+        .unzip();
     NoiseModel { amplitude, phase }
 }
 

@@ -1139,20 +1139,28 @@ impl Problem<'_> {
         th: &Parameters,
         e: Evaluation,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
+        use rayon::prelude::*;
         let cols = self.dtheta_du(th);
         let n = self.free.len();
         let jt = e.jacobian.as_ref()?;
-        let mut j = Vec::with_capacity(jt.len() * n);
-        for row in jt {
-            for col in &cols {
-                let mut s = 0.0;
-                for p in 0..N_PARAMS {
-                    if col[p] != 0.0 {
-                        s += row[p] * col[p];
+        // (rows in parallel: thousands of rows on every point, between two
+        // evaluations whose sweeps are parallel; each entry is the same sum)
+        let mut j = vec![0.0; jt.len() * n];
+        if n > 0 {
+            j.par_chunks_mut(n)
+                .zip(jt.par_iter())
+                .with_min_len(256)
+                .for_each(|(out, row)| {
+                    for (o, col) in out.iter_mut().zip(&cols) {
+                        let mut s = 0.0;
+                        for p in 0..N_PARAMS {
+                            if col[p] != 0.0 {
+                                s += row[p] * col[p];
+                            }
+                        }
+                        *o = if s.is_finite() { s } else { 0.0 };
                     }
-                }
-                j.push(if s.is_finite() { s } else { 0.0 });
-            }
+                });
         }
         e.residuals
             .iter()

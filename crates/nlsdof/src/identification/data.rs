@@ -440,37 +440,30 @@ mod tests {
         // most steps (5: curves 1, 2, 4 by level 7, 2, 2, so 2, 1, 4), then
         // 4 steps (3), then 3 steps by level (5 then 0)
         let costliest_first = vec![2, 1, 4, 3, 5, 0];
-        let started = std::sync::Mutex::new(Vec::new());
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let got = one.install(|| {
-            data.map_curves(|i, _| {
-                started.lock().unwrap().push(i);
-                Ok::<_, ()>(i)
-            })
-        });
-        assert_eq!(got, Ok((0..6).collect::<Vec<_>>()));
-        assert_eq!(*started.lock().unwrap(), costliest_first);
+        // the curves in the order they started on a pool of `threads`, each
+        // taking `pause` once started
+        let started_on = |threads: usize, pause: std::time::Duration| {
+            let started = std::sync::Mutex::new(Vec::new());
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let got = pool.install(|| {
+                data.map_curves(|i, _| {
+                    started.lock().unwrap().push(i);
+                    std::thread::sleep(pause);
+                    Ok::<_, ()>(i)
+                })
+            });
+            assert_eq!(got, Ok((0..6).collect::<Vec<_>>()), "{threads} threads");
+            started.into_inner().unwrap()
+        };
+        assert_eq!(started_on(1, std::time::Duration::ZERO), costliest_first);
         // two threads: every curve once, the first two started before any
         // other (rayon's split of that order started 2 and 3; a thread
         // would have to stall 30 ms between taking a curve and starting it
         // for this to fail by chance)
-        started.lock().unwrap().clear();
-        let two = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        let got = two.install(|| {
-            data.map_curves(|i, _| {
-                started.lock().unwrap().push(i);
-                std::thread::sleep(std::time::Duration::from_millis(30));
-                Ok::<_, ()>(i)
-            })
-        });
-        assert_eq!(got, Ok((0..6).collect::<Vec<_>>()));
-        let order = started.lock().unwrap().clone();
+        let order = started_on(2, std::time::Duration::from_millis(30));
         let mut sorted = order.clone();
         sorted.sort();
         assert_eq!(sorted, (0..6).collect::<Vec<_>>());

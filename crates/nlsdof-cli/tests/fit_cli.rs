@@ -572,6 +572,23 @@ fn default_fits_of_the_beam_sets_complete_and_say_they_do_not_fit() {
         let r = v["misfit"].as_f64().expect("misfit is a number");
         assert!(r > 10.0, "{set}: misfit {r}");
         assert_eq!(v["intervals_valid"], false, "{set}");
+        // the beams' phases are fitted: the line and JSON say which part
+        // does not fit, amplitudes or phases
+        let a = &v["adequacy"];
+        let amp = a["amplitude_residual_over_noise"].as_f64();
+        let phase = a["phase_residual_over_noise"].as_f64();
+        assert!(amp.is_some() && phase.is_some(), "{set}: {a}");
+        let msg = a["message"].as_str().unwrap();
+        assert!(
+            msg.contains("(amplitudes ") && msg.contains("x, phases "),
+            "{msg}"
+        );
+        for l in v["levels"].as_array().unwrap() {
+            assert!(
+                l["phase_residual_over_noise"].as_f64().is_some(),
+                "{set}: {l}"
+            );
+        }
     }
 }
 

@@ -157,13 +157,15 @@ pub fn adequacy_json(id: &Identification) -> Value {
         "adequate": a.adequate,
         "residual_over_noise": a.ratio,
         "peak_residual_over_noise": a.peak_ratio,
+        "amplitude_residual_over_noise": a.split.map(|s| s.ratios().0),
+        "phase_residual_over_noise": a.split.map(|s| s.ratios().1),
         "failing_levels": a.failing.iter().map(|&i| {
             let c = &id.curves[i];
             json!({"level": c.level, "sweep": c.direction.name(), "residual_over_noise": c.noise.ratio()})
         }).collect::<Vec<_>>(),
         "message": id.adequacy_message(),
         "thresholds": {"curve_mean_z2": ADEQUACY_CURVE, "all_mean_z2": ADEQUACY_ALL, "peaks_mean_z2": ADEQUACY_PEAKS,
-                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2 (there against the noise the peaks' own pseudo-residuals support, where they reject the estimate at their chi^2 0.1 % point); residual_over_noise and peak_residual_over_noise are sqrt(mean z^2)"},
+                       "note": "z = residual / local noise (estimated from the fit's residuals by pseudo-residuals); a curve does not fit when mean z^2 exceeds curve_mean_z2, the data when the mean over all points exceeds all_mean_z2 or the mean over the resonance peaks (points at least half their curve's peak) exceeds peaks_mean_z2 (there against the noise the peaks' own pseudo-residuals support, where they reject the estimate at their chi^2 0.1 % point); residual_over_noise and peak_residual_over_noise are sqrt(mean z^2); with phases, amplitude_residual_over_noise and phase_residual_over_noise are the same over the amplitude residuals (with the jump penalties) and over the phase residuals apart (null without phases)"},
         "escalation": a.escalation,
         "late_folds": a.late_folds.iter().map(|&(i, r)| {
             let c = &id.curves[i];
@@ -199,6 +201,8 @@ pub fn curves_json(id: &Identification) -> Vec<Value> {
                 "left_early": c.left_early_by.is_some(),
                 "left_early_by_hz": c.left_early_by.map(hz),
                 "residual_over_noise": c.noise.ratio(),
+                "amplitude_residual_over_noise": c.noise.split.map(|s| s.ratios().0),
+                "phase_residual_over_noise": c.noise.split.map(|s| s.ratios().1),
                 "noise_rms": c.noise.noise_rms,
                 "upper_branch_rms": c.upper_branch_rms,
                 "peak_measured": c.peak.0, "peak_model": c.peak.1,

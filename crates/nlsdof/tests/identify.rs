@@ -414,6 +414,81 @@ fn identify_reports_its_stages() {
     }
 }
 
+/// With phases, the first line says which part does not fit. Duffing data
+/// (two levels up, 1 % amplitude noise, 0.3° phase noise) whose phases
+/// carry a ramp of 0 → 6° across the band that no model phase follows:
+/// the amplitudes fit their noise and the phases do not. The two ratios
+/// recombine to the statistic the decision uses (the oracle: the mean of
+/// z² over both parts, equal counts), and the message quotes them.
+#[test]
+fn a_fit_with_phases_says_whether_amplitudes_or_phases_do_not_fit() {
+    let wn = TWO_PI * 10.0;
+    let t = Parameters::from([wn * wn, 2.0 * 0.02 * wn, 1.0e6, 2.0, 0.0, 0.0, 1.0]);
+    let mut d = data(
+        &t,
+        &[0.5, 1.0],
+        (8.0, 13.0),
+        150,
+        &[SweepDirection::Up],
+        Some((1.0, 0.0)),
+    );
+    let mut rng = support::fixtures::Rng(0x5eed_0025);
+    for c in &mut d.curves {
+        let n = c.omegas.len();
+        for a in &mut c.amplitudes {
+            *a *= 1.0 + 0.01 * rng.normal();
+        }
+        let ph = c.phases.as_mut().expect("phases");
+        for (i, p) in ph.iter_mut().enumerate() {
+            *p += (6.0 * i as f64 / (n - 1) as f64 + 0.3 * rng.normal()).to_radians();
+        }
+    }
+    let id = identify(&d, &FitPlan::new(ModelKind::Duffing), &|_| {}).unwrap();
+    assert!(id.phase.is_some());
+    let split = id.adequacy.split.expect("a split with phases");
+    let (amp, phase) = split.ratios();
+    assert!(amp < 1.5, "amplitudes {amp}x the noise");
+    assert!(phase > 3.0, "phases {phase}x the noise");
+    // equal counts (every point has both): the mean of the two means
+    let mean = 0.5 * (split.amplitude_mean_z2 + split.phase_mean_z2);
+    assert!(
+        rel(id.adequacy.ratio.powi(2), mean) < 1e-9,
+        "{} vs {mean}",
+        id.adequacy.ratio.powi(2)
+    );
+    for c in &id.curves {
+        let s = c.noise.split.expect("per curve");
+        let m = 0.5 * (s.amplitude_mean_z2 + s.phase_mean_z2);
+        assert!(rel(c.noise.mean_z2, m) < 1e-9, "{} vs {m}", c.noise.mean_z2);
+    }
+    assert!(!id.adequacy.adequate);
+    let msg = id.adequacy_message().unwrap();
+    let worst = id
+        .adequacy
+        .failing
+        .iter()
+        .map(|&i| id.curves[i].noise)
+        .max_by(|a, b| a.ratio().total_cmp(&b.ratio()));
+    let (a, p) = worst
+        .and_then(|n| n.split)
+        .map_or((amp, phase), |s| s.ratios());
+    assert!(
+        msg.contains(&format!("(amplitudes {a:.1}x, phases {p:.1}x)")),
+        "{msg}"
+    );
+    // without phases there is no split, and the line has none
+    let mut bare = d.clone();
+    for c in &mut bare.curves {
+        c.phases = None;
+    }
+    let id = identify(&bare, &FitPlan::new(ModelKind::Linear), &|_| {}).unwrap();
+    assert!(id.adequacy.split.is_none());
+    assert!(id.curves.iter().all(|c| c.noise.split.is_none()));
+    if let Some(msg) = id.adequacy_message() {
+        assert!(!msg.contains("phases"), "{msg}");
+    }
+}
+
 /// A blind in-family set (`../shared/tools/blind_suite.py`, seed
 /// 2402129818, case h016-mixed: three up-sweeps with jumps, exact
 /// first-order HB by the independent oracle, 1 % amplitude noise) on which

@@ -325,7 +325,8 @@ curve's residual against its noise, estimated from the data; a fit well above it
 single forcing level, escalates (more candidates, both signs, folds moved, a multistart of 16, each \
 exponent held across its range; a fit within its noise whose fold ends pinned at a measured step \
 holds each exponent half a unit either side) and, if it still does not fit, says so on \
-the first line (\"the model does not fit levels ...: residual N x the noise\") and in JSON under \
+the first line (\"the model does not fit levels ...: residual N x the noise\"; with phases also \
+\"(amplitudes A x, phases P x)\", each against its own noise) and in JSON under \
 \"adequacy\". A fit whose measured sweep leaves the model's branch a step or more before the model's \
 fold (read exactly) does not fit either: the model's own sweep does not follow the data there. Details: docs/identification.md.\n\n\
 OBJECTIVE: each measured point against the model state the measured sweep was on (the state the \

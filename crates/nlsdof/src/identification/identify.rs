@@ -164,7 +164,10 @@ use super::landscape::{
 };
 use super::levenberg_marquardt::{LmOptions, Termination};
 use super::models::*;
-use super::noise::{noise_model, pseudo_residual_chi2, z2_per_curve, CurveNoise, NoiseModel};
+use super::noise::{
+    noise_model, pseudo_residual_chi2, z2_per_curve, z2_split_per_curve, CurveNoise, NoiseModel,
+    NoiseSplit,
+};
 use super::objective::{Evaluation, FitSpec, ResponseBranch, Sign, SpecError, Status};
 use super::output_error::{evaluate_measured, Compared, CurveMatch, JumpReading, MatchOptions};
 use super::search::SignTrial;
@@ -755,6 +758,11 @@ pub struct Adequacy {
     /// truth's). Not adequate.
     #[serde(default)]
     pub late_folds: Vec<(usize, f64)>,
+    /// For a fit with phases: the mean `z²` over all points of the
+    /// amplitude residuals (with the penalty terms) and of the phase
+    /// residuals, apart (the first line names the part that does not fit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub split: Option<NoiseSplit>,
 }
 
 impl Adequacy {
@@ -971,15 +979,33 @@ impl Identification {
                 self.adequacy.ratio
             )
         } else if names.is_empty() {
-            format!("WARNING: the model does not fit the data: residual {r:.1}x the noise{tried}")
+            let parts = split_text(self.adequacy.split.as_ref());
+            format!("WARNING: the model does not fit the data: residual {r:.1}x the noise{parts}{tried}")
         } else {
+            // the split of the curve whose ratio is quoted
+            let worst = self
+                .adequacy
+                .failing
+                .iter()
+                .filter_map(|&i| self.curves.get(i))
+                .max_by(|a, b| a.noise.ratio().total_cmp(&b.noise.ratio()));
+            let parts = split_text(worst.and_then(|c| c.noise.split.as_ref()));
             format!(
-                "WARNING: the model does not fit level{} {}: residual {r:.1}x the noise{tried}",
+                "WARNING: the model does not fit level{} {}: residual {r:.1}x the noise{parts}{tried}",
                 if names.len() > 1 { "s" } else { "" },
                 names.join(", "),
             )
         })
     }
+}
+
+/// " (amplitudes 1.0x, phases 2.1x)": which part of a fit with phases
+/// does not fit its noise (empty without phases).
+fn split_text(split: Option<&NoiseSplit>) -> String {
+    split.map_or_else(String::new, |s| {
+        let (a, p) = s.ratios();
+        format!(" (amplitudes {a:.1}x, phases {p:.1}x)")
+    })
 }
 
 /// One fit on its way through the stages.
@@ -4229,6 +4255,7 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
                 escalation: Vec::new(),
                 needs_early_jumps: None,
                 late_folds: Vec::new(),
+                split: None,
             },
         )
     };
@@ -4243,6 +4270,9 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
     let nm = noise_model(data, &e.residuals, wp).with_precision_floor(data);
     let pens: Vec<Vec<f64>> = matches.iter().map(|c| c.penalties.clone()).collect();
     let z = z2_per_curve(data, &e.residuals, wp, &pens, &nm);
+    let zs = z2_split_per_curve(data, &e.residuals, wp, &pens, &nm);
+    // (the split over all points: amplitude, then phase `(Σ z², count)`)
+    let mut split_all: Option<[(f64, usize); 2]> = None;
     let mut curves = Vec::with_capacity(data.curves.len());
     let mut off = 0;
     let (mut z_all, mut n_all) = (0.0, 0usize);
@@ -4284,10 +4314,23 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
         } else {
             f64::NAN
         };
+        let split = match zs[ci] {
+            ((za, na), Some((zp, np))) if na > 0 && np > 0 => {
+                let all = split_all.get_or_insert([(0.0, 0); 2]);
+                all[0] = (all[0].0 + za, all[0].1 + na);
+                all[1] = (all[1].0 + zp, all[1].1 + np);
+                Some(NoiseSplit {
+                    amplitude_mean_z2: za / na as f64,
+                    phase_mean_z2: zp / np as f64,
+                })
+            }
+            _ => None,
+        };
         let noise = CurveNoise {
             mean_z2,
             noise_rms: rms(&mut (0..n).map(|i| nm.amplitude[ci][i] * to_m(i))),
             residual_rms: rms(&mut r.iter().copied()),
+            split,
         };
         if mean_z2.is_finite() {
             z_all += z2;
@@ -4376,6 +4419,10 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
             escalation: Vec::new(),
             needs_early_jumps: None,
             late_folds,
+            split: split_all.map(|[(za, na), (zp, np)]| NoiseSplit {
+                amplitude_mean_z2: za / na as f64,
+                phase_mean_z2: zp / np as f64,
+            }),
         },
     )
 }

@@ -383,6 +383,50 @@ pub fn z2_per_curve(
     out
 }
 
+/// `(Σ z², count)` of a set of residuals.
+pub type Z2Sum = (f64, usize);
+
+/// [`z2_per_curve`] with the amplitude rows (and penalties) and the phase
+/// rows of each curve summed apart: `(Σ z², count)` of each, the phase
+/// part `None` for a curve without phase residuals. For reports only: the
+/// adequacy decisions use [`z2_per_curve`]'s sums.
+pub fn z2_split_per_curve(
+    data: &Dataset,
+    residuals: &[f64],
+    with_phase: bool,
+    penalties: &[Vec<f64>],
+    noise: &NoiseModel,
+) -> Vec<(Z2Sum, Option<Z2Sum>)> {
+    let lay = layout(data, with_phase);
+    let mut out = Vec::with_capacity(data.curves.len());
+    for (k, &(a, p, n)) in lay.iter().enumerate() {
+        let mut amp = (0.0, 0usize);
+        let mut phase = None;
+        for i in 0..n {
+            let s = noise.amplitude[k][i];
+            if s > 0.0 && s.is_finite() {
+                let pen = penalties
+                    .get(k)
+                    .and_then(|v| v.get(i))
+                    .copied()
+                    .unwrap_or(0.0);
+                amp.0 += (residuals[a + i].powi(2) + pen) / (s * s);
+                amp.1 += 1;
+            }
+            if let (Some(p), Some(Some(sp))) = (p, noise.phase.get(k)) {
+                let ph = phase.get_or_insert((0.0, 0usize));
+                let s = sp[i];
+                if s > 0.0 && s.is_finite() {
+                    ph.0 += residuals[p + i].powi(2) / (s * s);
+                    ph.1 += 1;
+                }
+            }
+        }
+        out.push((amp, phase));
+    }
+    out
+}
+
 /// Per-curve adequacy of a fit: mean `z²` of its residuals against the
 /// local noise (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -394,6 +438,31 @@ pub struct CurveNoise {
     pub noise_rms: f64,
     /// RMS of the residuals, m.
     pub residual_rms: f64,
+    /// For a curve fitted with its phases: the mean `z²` of its amplitude
+    /// residuals (with the penalty terms) and of its phase residuals,
+    /// apart ([`z2_split_per_curve`]), so that a report can say which of
+    /// the two does not fit. `None` without phases.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub split: Option<NoiseSplit>,
+}
+
+/// The mean `z²` of a curve's (or a set's) amplitude residuals, penalty
+/// terms included, and of its phase residuals ([`CurveNoise::split`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NoiseSplit {
+    pub amplitude_mean_z2: f64,
+    pub phase_mean_z2: f64,
+}
+
+impl NoiseSplit {
+    /// The amplitudes' and the phases' residuals in units of the noise,
+    /// `√(mean z²)` of each.
+    pub fn ratios(&self) -> (f64, f64) {
+        (
+            self.amplitude_mean_z2.max(0.0).sqrt(),
+            self.phase_mean_z2.max(0.0).sqrt(),
+        )
+    }
 }
 
 impl CurveNoise {
@@ -406,6 +475,50 @@ impl CurveNoise {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The split sums of [`z2_split_per_curve`] add up to [`z2_per_curve`]'s
+    /// (the oracle; to rounding, the order of the additions differs), with
+    /// the counts; a curve without phases has no phase part.
+    #[test]
+    fn the_split_adds_up_to_the_whole() {
+        let curve = |n: usize, phases: bool| Curve {
+            level: "L".into(),
+            gamma: 1.0,
+            direction: crate::harmonic_balance::SweepDirection::Up,
+            omegas: (0..n).map(|i| 60.0 + i as f64).collect(),
+            amplitudes: (0..n).map(|i| 1.0 + 0.1 * i as f64).collect(),
+            phases: phases.then(|| vec![0.5; n]),
+            weights: vec![1.0; n],
+        };
+        let data = Dataset {
+            curves: vec![curve(7, true), curve(5, false), curve(6, true)],
+        };
+        let mut rng = Rng(11);
+        // amplitude rows of every curve, then phase rows of the curves with phases
+        let rows = 7 + 5 + 6 + 7 + 6;
+        let residuals: Vec<f64> = (0..rows).map(|_| 0.01 * rng.normal()).collect();
+        let penalties: Vec<Vec<f64>> = [7, 5, 6]
+            .iter()
+            .map(|&n| (0..n).map(|i| if i == 2 { 1e-4 } else { 0.0 }).collect())
+            .collect();
+        let noise = noise_model(&data, &residuals, true);
+        let whole = z2_per_curve(&data, &residuals, true, &penalties, &noise);
+        let split = z2_split_per_curve(&data, &residuals, true, &penalties, &noise);
+        for (k, ((za, na), phase)) in split.iter().enumerate() {
+            let (zp, np) = phase.unwrap_or((0.0, 0));
+            assert_eq!(na + np, whole[k].1, "curve {k}");
+            assert!(
+                ((za + zp) - whole[k].0).abs() <= 1e-12 * whole[k].0,
+                "curve {k}"
+            );
+            assert_eq!(
+                phase.is_some(),
+                data.curves[k].phases.is_some(),
+                "curve {k}"
+            );
+            assert!(*za > 0.0);
+        }
+    }
     use crate::harmonic_balance::SweepDirection;
 
     /// SplitMix64 + Box–Muller, for the oracle below.

@@ -931,6 +931,16 @@ def test_a_model_that_does_not_fit_its_noise_has_no_intervals():
     assert first.startswith("WARNING: the model does not fit"), first
     assert f"residual {d['misfit']:.1f}x the noise" in first, (first, d["misfit"])
     assert all(p["interval"] is None for p in r.parameters.values())
+    # the beam's phases are fitted: the amplitudes' and the phases' parts
+    # apart, as on the CLI's first line
+    # (over all points under "adequacy"; the line quotes the worst failing
+    # level's, found under "levels")
+    a = d["adequacy"]
+    assert a["amplitude_residual_over_noise"] > 0 and a["phase_residual_over_noise"] > 0, a
+    worst = max(a["failing_levels"], key=lambda f: f["residual_over_noise"])
+    lv = next(l for l in d["levels"] if (l["level"], l["sweep"]) == (worst["level"], worst["sweep"]))
+    amp, phase = lv["amplitude_residual_over_noise"], lv["phase_residual_over_noise"]
+    assert f"(amplitudes {amp:.1f}x, phases {phase:.1f}x)" in first, (first, amp, phase)
 
 
 def test_notes_are_the_cli_notes(cli):

@@ -345,6 +345,40 @@ impl NoiseModel {
     }
 }
 
+/// The `z²` terms of curve `k` at each of its steps: the amplitude
+/// residual's (with the step's penalty) and the phase residual's, each
+/// `None` where its noise is not a positive number (and the phase's where
+/// the curve has no phase residual). `lay` is the curve's `(amplitude row,
+/// phase row, steps)`.
+fn z2_terms<'a>(
+    k: usize,
+    lay: (usize, Option<usize>, usize),
+    residuals: &'a [f64],
+    penalties: &'a [Vec<f64>],
+    noise: &'a NoiseModel,
+) -> impl Iterator<Item = (Option<f64>, Option<f64>)> + 'a {
+    let (a, p, n) = lay;
+    (0..n).map(move |i| {
+        let s = noise.amplitude[k][i];
+        let amp = (s > 0.0 && s.is_finite()).then(|| {
+            let pen = penalties
+                .get(k)
+                .and_then(|v| v.get(i))
+                .copied()
+                .unwrap_or(0.0);
+            (residuals[a + i].powi(2) + pen) / (s * s)
+        });
+        let phase = match (p, noise.phase.get(k)) {
+            (Some(p), Some(Some(sp))) => {
+                let s = sp[i];
+                (s > 0.0 && s.is_finite()).then(|| residuals[p + i].powi(2) / (s * s))
+            }
+            _ => None,
+        };
+        (amp, phase)
+    })
+}
+
 /// Per curve: `Σ z²` of `residuals` against `noise` (amplitude and phase
 /// residuals, and the per-point penalties `penalties[c][i]`, squared
 /// residual units), and the number of residuals counted.
@@ -357,25 +391,13 @@ pub fn z2_per_curve(
 ) -> Vec<(f64, usize)> {
     let lay = layout(data, with_phase);
     let mut out = Vec::with_capacity(data.curves.len());
-    for (k, &(a, p, n)) in lay.iter().enumerate() {
+    for (k, &l) in lay.iter().enumerate() {
         let (mut z2, mut count) = (0.0, 0usize);
-        for i in 0..n {
-            let s = noise.amplitude[k][i];
-            if s > 0.0 && s.is_finite() {
-                let pen = penalties
-                    .get(k)
-                    .and_then(|v| v.get(i))
-                    .copied()
-                    .unwrap_or(0.0);
-                z2 += (residuals[a + i].powi(2) + pen) / (s * s);
+        // (each step's amplitude term, then its phase term)
+        for (amp, phase) in z2_terms(k, l, residuals, penalties, noise) {
+            for t in [amp, phase].into_iter().flatten() {
+                z2 += t;
                 count += 1;
-            }
-            if let (Some(p), Some(Some(sp))) = (p, noise.phase.get(k)) {
-                let s = sp[i];
-                if s > 0.0 && s.is_finite() {
-                    z2 += residuals[p + i].powi(2) / (s * s);
-                    count += 1;
-                }
             }
         }
         out.push((z2, count));
@@ -399,27 +421,16 @@ pub fn z2_split_per_curve(
 ) -> Vec<(Z2Sum, Option<Z2Sum>)> {
     let lay = layout(data, with_phase);
     let mut out = Vec::with_capacity(data.curves.len());
-    for (k, &(a, p, n)) in lay.iter().enumerate() {
+    for (k, &l) in lay.iter().enumerate() {
         let mut amp = (0.0, 0usize);
-        let mut phase = None;
-        for i in 0..n {
-            let s = noise.amplitude[k][i];
-            if s > 0.0 && s.is_finite() {
-                let pen = penalties
-                    .get(k)
-                    .and_then(|v| v.get(i))
-                    .copied()
-                    .unwrap_or(0.0);
-                amp.0 += (residuals[a + i].powi(2) + pen) / (s * s);
-                amp.1 += 1;
+        let mut phase =
+            (l.1.is_some() && matches!(noise.phase.get(k), Some(Some(_)))).then_some((0.0, 0usize));
+        for (a, p) in z2_terms(k, l, residuals, penalties, noise) {
+            if let Some(t) = a {
+                amp = (amp.0 + t, amp.1 + 1);
             }
-            if let (Some(p), Some(Some(sp))) = (p, noise.phase.get(k)) {
-                let ph = phase.get_or_insert((0.0, 0usize));
-                let s = sp[i];
-                if s > 0.0 && s.is_finite() {
-                    ph.0 += residuals[p + i].powi(2) / (s * s);
-                    ph.1 += 1;
-                }
+            if let (Some(t), Some(ph)) = (p, phase.as_mut()) {
+                *ph = (ph.0 + t, ph.1 + 1);
             }
         }
         out.push((amp, phase));

@@ -379,6 +379,9 @@ fn z2_terms<'a>(
     })
 }
 
+/// `(Σ z², count)` of a set of residuals.
+pub type Z2Sum = (f64, usize);
+
 /// Per curve: `Σ z²` of `residuals` against `noise` (amplitude and phase
 /// residuals, and the per-point penalties `penalties[c][i]`, squared
 /// residual units), and the number of residuals counted.
@@ -388,7 +391,7 @@ pub fn z2_per_curve(
     with_phase: bool,
     penalties: &[Vec<f64>],
     noise: &NoiseModel,
-) -> Vec<(f64, usize)> {
+) -> Vec<Z2Sum> {
     let lay = layout(data, with_phase);
     let mut out = Vec::with_capacity(data.curves.len());
     for (k, &l) in lay.iter().enumerate() {
@@ -404,9 +407,6 @@ pub fn z2_per_curve(
     }
     out
 }
-
-/// `(Σ z², count)` of a set of residuals.
-pub type Z2Sum = (f64, usize);
 
 /// [`z2_per_curve`] with the amplitude rows (and penalties) and the phase
 /// rows of each curve summed apart: `(Σ z², count)` of each, the phase
@@ -486,6 +486,7 @@ impl CurveNoise {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::harmonic_balance::SweepDirection;
 
     /// The split sums of [`z2_split_per_curve`] add up to [`z2_per_curve`]'s
     /// (the oracle; to rounding, the order of the additions differs), with
@@ -495,7 +496,7 @@ mod tests {
         let curve = |n: usize, phases: bool| Curve {
             level: "L".into(),
             gamma: 1.0,
-            direction: crate::harmonic_balance::SweepDirection::Up,
+            direction: SweepDirection::Up,
             omegas: (0..n).map(|i| 60.0 + i as f64).collect(),
             amplitudes: (0..n).map(|i| 1.0 + 0.1 * i as f64).collect(),
             phases: phases.then(|| vec![0.5; n]),
@@ -530,7 +531,6 @@ mod tests {
             assert!(*za > 0.0);
         }
     }
-    use crate::harmonic_balance::SweepDirection;
 
     /// SplitMix64 + Box–Muller, for the oracle below.
     struct Rng(u64);

@@ -29,11 +29,16 @@
 //! that reaches the grid edge is reported open on that side.
 
 use super::equation_error::{
-    solve_magnitude_to, solve_phase, EquationErrorError, EquationErrorFit, PhaseConvention,
-    Prepared, Terms,
+    solve_magnitude_to, solve_phase_with, Columns, EquationErrorError, EquationErrorFit,
+    NodeColumns, PhaseConvention, PhaseTrig, Prepared, Terms,
 };
 use crate::cancel::Cancel;
 use rayon::prelude::*;
+
+/// Most entries (nodes along ρ × points) of the landscape's table of
+/// stiffness columns (8 bytes each: 32 MB); a larger landscape computes
+/// them node by node.
+const MAX_TABLE: usize = 1 << 22;
 
 /// χ²₁ 95 % quantile.
 pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
@@ -172,6 +177,23 @@ pub fn landscape_cancellable(
     let rv = rho.values();
     let ev = eta.values();
     let nr = rv.len();
+    // the phase form's columns of every ρ and the phases' sin/cos, once
+    // (`NodeColumns`: the same numbers as each node computed for itself;
+    // a table too large for memory is computed node by node instead)
+    let phased = match phase {
+        LandscapePhase::Ignore => None,
+        LandscapePhase::Known(c) => Some((Some(c), c.delay)),
+        LandscapePhase::Detect { delay } => Some((None, delay)),
+    };
+    let tabled = phased.filter(|_| nr.saturating_mul(prep.len()) <= MAX_TABLE);
+    let trig = phased.map(|(conv, delay)| PhaseTrig::new(prep, conv, delay));
+    let stiffness: Vec<Vec<f64>> = match tabled {
+        Some(_) => rv
+            .par_iter()
+            .map(|&r| Columns::stiffness(prep, r))
+            .collect(),
+        None => Vec::new(),
+    };
     // `chain`: each node of a row without phase starts from the previous
     // node's solution
     let solve_rows = |etas: &[f64],
@@ -181,9 +203,12 @@ pub fn landscape_cancellable(
         etas.par_iter()
             .map(|&e| {
                 let mut warm: Option<Vec<f64>> = None;
+                // (the row's η columns, when the ρ columns are tabled)
+                let damping = tabled.map(|_| Columns::damping(prep, e));
                 let row: Vec<_> = rv
                     .iter()
-                    .map(|&r| match phase {
+                    .enumerate()
+                    .map(|(ir, &r)| match phase {
                         // (a placeholder: the landscape is not returned)
                         _ if cancel.is_cancelled() => {
                             Err(EquationErrorError::NotConverged { rho: r, eta: e })
@@ -209,11 +234,24 @@ pub fn landscape_cancellable(
                                 }
                             }
                         }
-                        LandscapePhase::Known(c) => {
-                            solve_phase(prep, terms, r, e, Some(c), c.delay)
-                        }
-                        LandscapePhase::Detect { delay } => {
-                            solve_phase(prep, terms, r, e, None, delay)
+                        LandscapePhase::Known(_) | LandscapePhase::Detect { .. } => {
+                            let (conv, delay) = phased.expect("a phase mode");
+                            let trig = trig.as_ref().expect("made with the phase mode");
+                            match &damping {
+                                Some((fd, power)) => {
+                                    let node = NodeColumns {
+                                        fa: &stiffness[ir],
+                                        fd,
+                                        damping_power: power,
+                                    };
+                                    solve_phase_with(prep, terms, (r, e), conv, delay, node, trig)
+                                }
+                                None => {
+                                    let node = Columns::node(prep, r, e);
+                                    let node = node.borrowed();
+                                    solve_phase_with(prep, terms, (r, e), conv, delay, node, trig)
+                                }
+                            }
                         }
                     })
                     .collect();

@@ -193,6 +193,20 @@ pub(crate) struct Point {
     /// ln a, ln(Ω a) (for the powers).
     pub la: f64,
     pub lwa: f64,
+    /// The phase form's entries of this point that no exponent changes
+    /// ([`coefficient_rows`]; scaled as in the module docs): `k a` (α),
+    /// `k Ω a/Ω_ref` (δ), with `k = √w/γ`, and the right-hand side
+    /// `√w Ω² a/(γ Ω_ref²)`.
+    pub row_alpha: f64,
+    pub row_delta: f64,
+    pub rhs: f64,
+}
+
+impl Point {
+    /// `√w/γ`, the factor of every coefficient entry of the point's rows.
+    fn k(&self) -> f64 {
+        self.sw / self.gamma
+    }
 }
 
 /// The data prepared once for many equation-error solves.
@@ -228,14 +242,19 @@ impl Prepared {
                 if !(a > 0.0) || c.weights[i] == 0.0 {
                     continue;
                 }
+                let (sw, gamma, wr) = (c.weights[i].sqrt(), c.gamma, scales.omega_ref);
+                let k = sw / gamma;
                 points.push(Point {
                     omega: w,
                     a,
-                    gamma: c.gamma,
-                    sw: c.weights[i].sqrt(),
+                    gamma,
+                    sw,
                     psi,
                     la: a.ln(),
                     lwa: (w * a).ln(),
+                    row_alpha: k * a,
+                    row_delta: k * w * a / wr,
+                    rhs: sw / gamma * w * w * a / (wr * wr),
                 });
             }
         }
@@ -309,9 +328,11 @@ fn damping_regressor(p: &Point, eta: f64, sc: &Scales) -> f64 {
 /// CPU time from 0.36 s to 0.26 s).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct NodeColumns<'a> {
-    /// `fa` per point ([`stiffness_regressor`] at the node's ρ).
+    /// The β entry `k fa` of each point's real row ([`stiffness_regressor`]
+    /// at the node's ρ; `k` of [`Point::k`]).
     pub fa: &'a [f64],
-    /// `fd` per point ([`damping_regressor`] at the node's η).
+    /// The κ entry `k fd/Ω_ref` of each point's imaginary row
+    /// ([`damping_regressor`] at the node's η).
     pub fd: &'a [f64],
     /// `exp(η ln Ωa)` per point ([`damping_positive`] at the node's η).
     pub damping_power: &'a [f64],
@@ -331,17 +352,18 @@ impl Columns {
         let sc = &prep.scales;
         prep.points
             .iter()
-            .map(|p| stiffness_regressor(p, rho, sc))
+            .map(|p| p.k() * stiffness_regressor(p, rho, sc))
             .collect()
     }
 
     /// The `η` columns of every point.
     pub fn damping(prep: &Prepared, eta: f64) -> (Vec<f64>, Vec<f64>) {
         let sc = &prep.scales;
+        let wr = sc.omega_ref;
         let fd = prep
             .points
             .iter()
-            .map(|p| damping_regressor(p, eta, sc))
+            .map(|p| p.k() * damping_regressor(p, eta, sc) / wr)
             .collect();
         let power = prep.points.iter().map(|p| (p.lwa * eta).exp()).collect();
         (fd, power)
@@ -372,8 +394,10 @@ impl Columns {
 /// [`NodeColumns`]).
 #[derive(Debug, Clone)]
 pub(crate) enum PhaseTrig {
-    /// `[sign +1, sign −1]` of [`solve_phase`] with `conv = None`.
-    Detect([Vec<(f64, f64)>; 2]),
+    /// `[sign +1, sign −1]` of [`solve_phase`] with `conv = None`: the
+    /// point's gain entries of each row, `[re Gr, re Gi, im Gr, im Gi]`
+    /// (`−√w cos, √w sin, −√w sin, −√w cos` over `Ω_ref²`).
+    Detect([Vec<[f64; 4]>; 2]),
     /// A known convention ([`PhaseConvention::lag`]).
     Known(Vec<(f64, f64)>),
 }
@@ -388,9 +412,10 @@ impl PhaseTrig {
                     .collect(),
             ),
             None => PhaseTrig::Detect([1.0, -1.0].map(|sign: f64| {
+                let wr = prep.scales.omega_ref;
                 prep.points
                     .iter()
-                    .map(|p| (sign * (p.psi - p.omega * delay)).sin_cos())
+                    .map(|p| complex_gain_entries(p, sign, delay, wr))
                     .collect()
             })),
         }
@@ -607,30 +632,40 @@ fn damping_positive(prep: &Prepared, f: &EquationErrorFit, eta: f64, power: &[f6
     s > 0.0
 }
 
+/// The gain entries of a point's rows in the complex-gain form
+/// ([`PhaseTrig::Detect`]).
+fn complex_gain_entries(p: &Point, sign: f64, delay: f64, wr: f64) -> [f64; 4] {
+    let th = sign * (p.psi - p.omega * delay);
+    let (s, c) = th.sin_cos();
+    [
+        -p.sw * c / (wr * wr),
+        p.sw * s / (wr * wr),
+        -p.sw * s / (wr * wr),
+        -p.sw * c / (wr * wr),
+    ]
+}
+
 /// The coefficient part of point `i`'s two phase-form rows (real: α, β;
 /// imaginary: δ, κ; scaled as in the module docs) and the index of the
 /// first gain column; `fa`, `fd` from the node's columns.
 fn coefficient_rows(
     p: &Point,
-    (fa, fd): (f64, f64),
-    sc: &Scales,
+    (kfa, kfd): (f64, f64),
     terms: Terms,
 ) -> ([f64; 6], [f64; 6], usize) {
-    let wr = sc.omega_ref;
-    let k = p.sw / p.gamma;
     let mut re = [0.0; 6];
     let mut im = [0.0; 6];
     let mut q = 0;
-    re[q] = k * p.a;
+    re[q] = p.row_alpha;
     q += 1;
     if terms.stiffness {
-        re[q] = k * fa;
+        re[q] = kfa;
         q += 1;
     }
-    im[q] = k * p.omega * p.a / wr;
+    im[q] = p.row_delta;
     q += 1;
     if terms.damping {
-        im[q] = k * fd / wr;
+        im[q] = kfd;
         q += 1;
     }
     (re, im, q)
@@ -663,7 +698,7 @@ fn solve_phase_complex(
     sign: f64,
     delay: f64,
     node: NodeColumns<'_>,
-    trig: Option<&[(f64, f64)]>,
+    trig: Option<&[[f64; 4]]>,
 ) -> Result<(EquationErrorFit, f64), EquationErrorError> {
     let sc = &prep.scales;
     let (cols, nc) = layout(terms);
@@ -672,17 +707,17 @@ fn solve_phase_complex(
     let mut ls = SmallLs::new(n);
     let mut rows: Vec<([f64; 6], f64, [f64; 6], f64)> = Vec::with_capacity(prep.points.len());
     for (i, p) in prep.points.iter().enumerate() {
-        let (s, c) = match trig {
+        let [gr_re, gi_re, gr_im, gi_im] = match trig {
             Some(t) => t[i],
-            None => (sign * (p.psi - p.omega * delay)).sin_cos(),
+            None => complex_gain_entries(p, sign, delay, wr),
         };
-        let (mut re, mut im, q) = coefficient_rows(p, (node.fa[i], node.fd[i]), sc, terms);
+        let (mut re, mut im, q) = coefficient_rows(p, (node.fa[i], node.fd[i]), terms);
         // G̃ = Gr + i Gi (unknowns scaled by 1/Ω_ref²: the rows are divided by Ω_ref²)
-        re[q] = -p.sw * c / (wr * wr);
-        re[q + 1] = p.sw * s / (wr * wr);
-        im[q] = -p.sw * s / (wr * wr);
-        im[q + 1] = -p.sw * c / (wr * wr);
-        let bre = p.sw / p.gamma * p.omega * p.omega * p.a / (wr * wr);
+        re[q] = gr_re;
+        re[q + 1] = gi_re;
+        im[q] = gr_im;
+        im[q + 1] = gi_im;
+        let bre = p.rhs;
         ls.add(&re[..n], bre);
         ls.add(&im[..n], 0.0);
         rows.push((re, bre, im, 0.0));
@@ -785,8 +820,8 @@ fn solve_phase_known(
             Some(t) => t[i],
             None => conv.lag(p.psi, p.omega).sin_cos(),
         };
-        let (mut re, mut im, q) = coefficient_rows(p, (node.fa[i], node.fd[i]), sc, terms);
-        let mut bre = p.sw / p.gamma * p.omega * p.omega * p.a / (wr * wr);
+        let (mut re, mut im, q) = coefficient_rows(p, (node.fa[i], node.fd[i]), terms);
+        let mut bre = p.rhs;
         let mut bim = 0.0;
         match terms.gain {
             None => {

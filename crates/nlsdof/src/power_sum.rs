@@ -375,11 +375,26 @@ impl PowerSum {
         hints: &[Vec<f64>],
         levels: &mut Vec<Vec<f64>>,
     ) {
-        levels.resize(self.len().max(1), Vec::new());
-        levels.iter_mut().for_each(Vec::clear);
         // the bracket ends and their values of every level, one allocation
         let mut scratch = Vec::with_capacity(4 * self.len() + 8);
-        self.roots_rec_warm(lo, hi, evaluators, hints, levels, &mut scratch);
+        self.roots_warm_in_with(lo, hi, evaluators, hints, levels, &mut scratch);
+    }
+
+    /// [`Self::roots_warm_in`] with the bracket stack in `scratch` (its
+    /// contents are discarded; its memory is reused).
+    pub(crate) fn roots_warm_in_with(
+        &self,
+        lo: f64,
+        hi: f64,
+        evaluators: &[(Evaluator<'_>, EvaluatorWithSlope<'_>)],
+        hints: &[Vec<f64>],
+        levels: &mut Vec<Vec<f64>>,
+        scratch: &mut Vec<f64>,
+    ) {
+        levels.resize(self.len().max(1), Vec::new());
+        levels.iter_mut().for_each(Vec::clear);
+        scratch.clear();
+        self.roots_rec_warm(lo, hi, evaluators, hints, levels, scratch);
     }
 
     fn roots_rec_warm(

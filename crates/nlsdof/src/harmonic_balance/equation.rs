@@ -357,16 +357,38 @@ impl ResponseEquation {
     /// `levels` receives this frequency's roots per level, for the next
     /// call. The results equal the cold isolation's to its tolerance
     /// (`2ε|t|`; test `warm_isolation_matches_the_cold_one`).
+    #[cfg(test)]
     pub(crate) fn fold_indicators_warm(
         &self,
         hints: &[Vec<f64>],
         levels: &mut Vec<Vec<f64>>,
     ) -> Result<FoldIndicators, SolveError> {
+        let mut out = FoldIndicators::default();
+        self.fold_indicators_warm_into(hints, levels, &mut out, &mut WarmBuffers::default())?;
+        Ok(out)
+    }
+
+    /// [`Self::fold_indicators_warm`] into `out`, with the working memory
+    /// of `buffers`: the same numbers, in the memory of an earlier call
+    /// (the fold search of a sweep isolates at a hundred or more
+    /// frequencies, a fit's at hundreds of thousands).
+    pub(crate) fn fold_indicators_warm_into(
+        &self,
+        hints: &[Vec<f64>],
+        levels: &mut Vec<Vec<f64>>,
+        out: &mut FoldIndicators,
+        buffers: &mut WarmBuffers,
+    ) -> Result<(), SolveError> {
         crate::power_sum::count(3);
+        out.roots.clear();
+        out.critical.clear();
+        out.inflection.clear();
+        out.inflection_ln_p.clear();
+        out.e_min = 0.0;
         let (ps, u) = self.scaled_power_sum();
         if ps.sign_changes() == 0 {
             levels.clear();
-            return Ok(FoldIndicators::default());
+            return Ok(());
         }
         let (lo, hi) = self.search_range(&ps, u)?;
         let e_min = ps.exponents()[0];
@@ -390,36 +412,33 @@ impl ResponseEquation {
             crate::power_sum::Evaluator<'_>,
             crate::power_sum::EvaluatorWithSlope<'_>,
         ); 2] = [(&top, &top_d), (&second, &second_d)];
-        let shifted: Vec<Vec<f64>>;
+        let WarmBuffers { shifted, scratch } = buffers;
         let hints = if u == 0.0 {
             hints
         } else {
-            shifted = hints
-                .iter()
-                .map(|h| h.iter().map(|t| t - u).collect())
-                .collect();
+            shifted.truncate(hints.len());
+            shifted.resize_with(hints.len(), Vec::new);
+            for (to, h) in shifted.iter_mut().zip(hints) {
+                to.clear();
+                to.extend(h.iter().map(|t| t - u));
+            }
             &shifted[..]
         };
-        ps.roots_warm_in(lo, hi, &evaluators, hints, levels);
+        ps.roots_warm_in_with(lo, hi, &evaluators, hints, levels, scratch);
         if u != 0.0 {
             levels.iter_mut().flatten().for_each(|t| *t += u);
         }
         let level = |k: usize| levels.get(k).map_or(&[][..], |v| &v[..]);
-        let mut inflection_ln_p = Vec::new();
-        Ok(FoldIndicators {
-            e_min,
-            roots: level(0).to_vec(),
-            critical: level(1).iter().map(|&t| (t, self.ln_p(t))).collect(),
-            inflection: level(2)
-                .iter()
-                .map(|&t| {
-                    let (v, lp) = self.level1_and_ln_p(t, e_min);
-                    inflection_ln_p.push(lp);
-                    (t, v)
-                })
-                .collect(),
-            inflection_ln_p,
-        })
+        out.e_min = e_min;
+        out.roots.extend_from_slice(level(0));
+        out.critical
+            .extend(level(1).iter().map(|&t| (t, self.ln_p(t))));
+        for &t in level(2) {
+            let (v, lp) = self.level1_and_ln_p(t, e_min);
+            out.inflection_ln_p.push(lp);
+            out.inflection.push((t, v));
+        }
+        Ok(())
     }
 
     /// Critical points of `e^{−e_min t}(P − 1)` (in `t`) inside the root
@@ -775,6 +794,15 @@ pub struct UniqueState {
     pub phase: f64,
     /// Slow-flow stability.
     pub stable: bool,
+}
+
+/// Working memory of [`ResponseEquation::fold_indicators_warm_into`]:
+/// the hints shifted to the scaled variable, and the isolation's bracket
+/// stack ([`PowerSum::roots_warm_in_with`]).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct WarmBuffers {
+    shifted: Vec<Vec<f64>>,
+    scratch: Vec<f64>,
 }
 
 /// See [`ResponseEquation::fold_indicators`].

@@ -71,7 +71,7 @@ const MAX_REFINE_DEPTH: u32 = 6;
 /// search (4 per refined cell); deterministic, so results stay reproducible.
 pub const REFINE_BUDGET: usize = 2 * GRID;
 
-#[derive(Clone)]
+#[derive(Clone, Default)]
 struct Sample {
     omega: f64,
     count: usize,
@@ -94,6 +94,18 @@ struct Sample {
     /// warm started from (empty for a level whose count differed there):
     /// the next sample's hints are extrapolated linearly.
     velocity: Vec<Vec<f64>>,
+    /// Working memory, kept for the next sample made in this one's place
+    /// ([`sample_in`]).
+    buffers: SampleBuffers,
+}
+
+/// Working memory of a sample: the warm start's hints, the isolation's
+/// `ln P` at the inflection points and its own buffers.
+#[derive(Clone, Default)]
+struct SampleBuffers {
+    hints: Vec<Vec<f64>>,
+    inflection_ln_p: Vec<f64>,
+    warm: super::equation::WarmBuffers,
 }
 
 /// Relative frequency step of the central difference in [`sample`].
@@ -104,40 +116,76 @@ const RATE_STEP: f64 = 1e-6;
 /// per level ([`ResponseEquation::fold_indicators_warm`]: the same roots
 /// to the isolation's tolerance, fewer evaluations).
 fn sample(r: &ForcedResponse, omega: f64, warm: Option<&Sample>) -> Result<Sample, SolveError> {
+    sample_in(r, omega, warm, Sample::default())
+}
+
+/// [`sample`] in the memory of `spare`, a sample no longer needed (its
+/// contents are discarded): the same numbers, without allocating a
+/// sample's dozen vectors afresh (a fit's fold searches take hundreds of
+/// thousands of samples).
+fn sample_in(
+    r: &ForcedResponse,
+    omega: f64,
+    warm: Option<&Sample>,
+    spare: Sample,
+) -> Result<Sample, SolveError> {
+    let Sample {
+        roots,
+        crit,
+        infl,
+        mut crit_rate,
+        mut infl_rate,
+        mut infl_ln_p,
+        mut levels,
+        mut velocity,
+        mut buffers,
+        ..
+    } = spare;
     let eq = r.equation(omega);
-    let mut levels = Vec::new();
     let warm = warm.filter(|_| !crate::power_sum::cold_requested());
     // hints: the warm sample's roots per level, moved by their rates
-    let hints: Vec<Vec<f64>> = warm.map_or_else(Vec::new, |s| {
-        let dw = (omega / s.omega).ln();
-        s.levels
-            .iter()
-            .enumerate()
-            .map(|(k, ts)| match s.velocity.get(k) {
-                Some(v) if v.len() == ts.len() => {
-                    ts.iter().zip(v).map(|(t, v)| t + v * dw).collect()
+    let hints = &mut buffers.hints;
+    match warm {
+        None => hints.clear(),
+        Some(s) => {
+            let dw = (omega / s.omega).ln();
+            hints.truncate(s.levels.len());
+            hints.resize_with(s.levels.len(), Vec::new);
+            for (k, (h, ts)) in hints.iter_mut().zip(&s.levels).enumerate() {
+                h.clear();
+                match s.velocity.get(k) {
+                    Some(v) if v.len() == ts.len() => {
+                        h.extend(ts.iter().zip(v).map(|(t, v)| t + v * dw));
+                    }
+                    _ => h.extend_from_slice(ts),
                 }
-                _ => ts.clone(),
-            })
-            .collect()
-    });
-    let ind = eq
-        .fold_indicators_warm(&hints, &mut levels)
+            }
+        }
+    }
+    let mut ind = super::equation::FoldIndicators {
+        roots,
+        critical: crit,
+        inflection: infl,
+        inflection_ln_p: std::mem::take(&mut buffers.inflection_ln_p),
+        e_min: 0.0,
+    };
+    eq.fold_indicators_warm_into(&buffers.hints, &mut levels, &mut ind, &mut buffers.warm)
         .map_err(|e| with_omega(e, omega))?;
-    let velocity = warm.map_or_else(Vec::new, |s| {
-        let dw = (omega / s.omega).ln();
-        levels
-            .iter()
-            .zip(&s.levels)
-            .map(|(now, then)| {
+    match warm {
+        None => velocity.clear(),
+        Some(s) => {
+            let dw = (omega / s.omega).ln();
+            let n = levels.len().min(s.levels.len());
+            velocity.truncate(n);
+            velocity.resize_with(n, Vec::new);
+            for ((v, now), then) in velocity.iter_mut().zip(&levels).zip(&s.levels) {
+                v.clear();
                 if now.len() == then.len() && dw != 0.0 {
-                    now.iter().zip(then).map(|(a, b)| (a - b) / dw).collect()
-                } else {
-                    Vec::new()
+                    v.extend(now.iter().zip(then).map(|(a, b)| (a - b) / dw));
                 }
-            })
-            .collect()
-    });
+            }
+        }
+    }
     // Rates of change with ln Ω, by central differences in Ω at fixed t.
     // By the envelope theorem that is the total derivative of a critical
     // value (∂ ln P/∂t = 0 there, so the motion of t_c does not count). At
@@ -148,26 +196,23 @@ fn sample(r: &ForcedResponse, omega: f64, warm: Option<&Sample>) -> Result<Sampl
         r.equation(omega * (-RATE_STEP).exp()),
         r.equation(omega * RATE_STEP.exp()),
     );
-    let crit_rate = ind
-        .critical
-        .iter()
-        .map(|&(t, _)| (hi.ln_p(t) - lo.ln_p(t)) / (2.0 * RATE_STEP))
-        .collect();
+    crit_rate.clear();
+    crit_rate.extend(
+        ind.critical
+            .iter()
+            .map(|&(t, _)| (hi.ln_p(t) - lo.ln_p(t)) / (2.0 * RATE_STEP)),
+    );
     // (level1 and ln P of each side from one evaluation of its parts; ln P
     // at the point itself from the isolation)
-    let (infl_rate, infl_ln_p) = ind
-        .inflection
-        .iter()
-        .zip(&ind.inflection_ln_p)
-        .map(|(&(t, _), &lp)| {
-            let (h1, hp) = hi.level1_and_ln_p(t, ind.e_min);
-            let (l1, lp_lo) = lo.level1_and_ln_p(t, ind.e_min);
-            (
-                (h1 - l1) / (2.0 * RATE_STEP),
-                (lp, (hp - lp_lo) / (2.0 * RATE_STEP)),
-            )
-        })
-        .unzip();
+    infl_rate.clear();
+    infl_ln_p.clear();
+    for (&(t, _), &lp) in ind.inflection.iter().zip(&ind.inflection_ln_p) {
+        let (h1, hp) = hi.level1_and_ln_p(t, ind.e_min);
+        let (l1, lp_lo) = lo.level1_and_ln_p(t, ind.e_min);
+        infl_rate.push((h1 - l1) / (2.0 * RATE_STEP));
+        infl_ln_p.push((lp, (hp - lp_lo) / (2.0 * RATE_STEP)));
+    }
+    buffers.inflection_ln_p = ind.inflection_ln_p;
     Ok(Sample {
         omega,
         count: ind.roots.len(),
@@ -179,6 +224,7 @@ fn sample(r: &ForcedResponse, omega: f64, warm: Option<&Sample>) -> Result<Sampl
         infl_ln_p,
         levels,
         velocity,
+        buffers,
     })
 }
 
@@ -708,10 +754,12 @@ fn search_until(
     let mut prev: Option<Sample> = None;
     // the last sample taken (warm start of the next one), wherever it was
     let mut last: Option<Sample> = None;
+    // samples no longer needed, whose memory the next ones reuse
+    let mut spare: Vec<Sample> = Vec::new();
     for i in 1..grid.len() {
         if fast && super::certificate::certify_cell(&eqs[i - 1], &eqs[i]) {
             if let Some(p) = prev.take() {
-                last = Some(p);
+                spare.extend(last.replace(p));
             }
             continue;
         }
@@ -719,17 +767,20 @@ fn search_until(
         let a = match prev.take() {
             Some(s) => s,
             None => {
-                let mut s = sample(r, grid[i - 1], last.as_ref())?;
+                let reuse = spare.pop().unwrap_or_default();
+                let mut s = sample_in(r, grid[i - 1], last.as_ref(), reuse)?;
                 roots[i - 1] = Some(s.isolated());
                 s
             }
         };
-        let mut b = sample(r, grid[i], Some(&a))?;
+        let reuse = spare.pop().unwrap_or_default();
+        let mut b = sample_in(r, grid[i], Some(&a), reuse)?;
         roots[i] = Some(b.isolated());
         locate(r, &a, &b, 0, &mut budget, locator, &mut out)?;
         if stop.is_some_and(|p| out.iter().any(|f| f.pair_above == p)) {
             break;
         }
+        spare.push(a);
         prev = Some(b);
     }
     out.sort_by(|a, b| a.omega.total_cmp(&b.omega));
@@ -1080,6 +1131,65 @@ mod tests {
     /// sum scaled to a largest term of 1 (`n` terms; measured 3.9, up to
     /// 31ε (1 + |t|) where the band is wide); the values at the critical
     /// and inflection points to 1e-9.
+    /// A sample made in the memory of a discarded one (`sample_in`, as the
+    /// search recycles them) is the sample made afresh, bit for bit: the
+    /// oracle is `sample` with new memory, warm started alike; the spares
+    /// come from other frequencies, models and levels, with more or fewer
+    /// roots and levels than the sample made in their place.
+    #[test]
+    fn a_sample_in_recycled_memory_is_the_fresh_sample() {
+        let mut rnd = crate::harmonic_balance::test_uniform(0x5a3e_11c0_0000_0016u64);
+        let mut spare = Sample::default();
+        let mut compared = 0;
+        for case in 0..60 {
+            let wn = 10.0;
+            let model = random_model(&mut rnd, case, wn);
+            let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
+            let Ok(r) =
+                ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance)
+            else {
+                continue;
+            };
+            let mut warm: Option<Sample> = None;
+            for k in 0..40 {
+                let w = wn * (0.7 + 0.02 * k as f64);
+                let Ok(fresh) = sample(&r, w, warm.as_ref()) else {
+                    warm = None;
+                    continue;
+                };
+                let reused = sample_in(&r, w, warm.as_ref(), std::mem::take(&mut spare))
+                    .expect("the fresh sample succeeded");
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let pairs = |v: &[(f64, f64)]| {
+                    v.iter()
+                        .map(|(x, y)| (x.to_bits(), y.to_bits()))
+                        .collect::<Vec<_>>()
+                };
+                let nested = |v: &[Vec<f64>]| v.iter().map(|l| bits(l)).collect::<Vec<_>>();
+                let what = format!("case {case} step {k}");
+                assert_eq!(fresh.omega.to_bits(), reused.omega.to_bits(), "{what}");
+                assert_eq!(fresh.count, reused.count, "{what}");
+                assert_eq!(bits(&fresh.roots), bits(&reused.roots), "{what}");
+                assert_eq!(pairs(&fresh.crit), pairs(&reused.crit), "{what}");
+                assert_eq!(pairs(&fresh.infl), pairs(&reused.infl), "{what}");
+                assert_eq!(bits(&fresh.crit_rate), bits(&reused.crit_rate), "{what}");
+                assert_eq!(bits(&fresh.infl_rate), bits(&reused.infl_rate), "{what}");
+                assert_eq!(pairs(&fresh.infl_ln_p), pairs(&reused.infl_ln_p), "{what}");
+                assert_eq!(nested(&fresh.levels), nested(&reused.levels), "{what}");
+                assert_eq!(nested(&fresh.velocity), nested(&reused.velocity), "{what}");
+                compared += 1;
+                // the next spare: this step's sample or the previous one
+                if let Some(old) = warm.replace(fresh) {
+                    spare = old;
+                }
+                if k % 3 == 0 {
+                    spare = reused;
+                }
+            }
+        }
+        assert!(compared > 1000, "{compared}");
+    }
+
     #[test]
     fn warm_isolation_matches_the_cold_one() {
         let mut rnd = crate::harmonic_balance::test_uniform(0x3a2d_57a2_7000_0003u64);

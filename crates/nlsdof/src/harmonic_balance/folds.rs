@@ -674,6 +674,9 @@ pub(crate) fn find_folds_on_steps(
     // no fold between them), and their roots and critical points bracket
     // the roots (`roots_bracketed`); else the sweep isolates them itself
     let mut cell = (0, 0);
+    // (the interpolated roots and critical points, and the hints, in the
+    // same memory from step to step)
+    let (mut rm, mut cm, mut hints) = (Vec::new(), Vec::new(), Vec::new());
     for i in 0..n {
         match at[i] {
             Some(g) => cell = (g, g),
@@ -699,18 +702,18 @@ pub(crate) fn find_folds_on_steps(
                 // below ln P = 0 over a width of t far smaller than it
                 // moves across a cell
                 let s = (omegas[i] / wa).ln() / (wb / wa).ln();
-                let lerp = |p: &[f64], q: &[f64]| -> Vec<f64> {
-                    if p.len() != q.len() {
-                        return Vec::new();
+                let lerp = |to: &mut Vec<f64>, p: &[f64], q: &[f64]| {
+                    to.clear();
+                    if p.len() == q.len() {
+                        to.extend(p.iter().zip(q).map(|(x, y)| x + s * (y - x)));
                     }
-                    p.iter().zip(q).map(|(x, y)| x + s * (y - x)).collect()
                 };
-                let (rm, cm) = (lerp(&ia.roots, &ib.roots), lerp(&ia.crit, &ib.crit));
-                let mut hints: Vec<f64> = [&ia.roots, &ia.crit, &ib.roots, &ib.crit, &rm, &cm]
-                    .into_iter()
-                    .flatten()
-                    .copied()
-                    .collect();
+                lerp(&mut rm, &ia.roots, &ib.roots);
+                lerp(&mut cm, &ia.crit, &ib.crit);
+                hints.clear();
+                for part in [&ia.roots, &ia.crit, &ib.roots, &ib.crit, &rm, &cm] {
+                    hints.extend_from_slice(part);
+                }
                 roots[i] = eqs[i].roots_bracketed(ia.roots.len(), &mut hints, &cm);
             }
         }

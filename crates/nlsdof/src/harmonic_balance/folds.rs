@@ -1146,11 +1146,7 @@ mod tests {
         let mut compared = 0;
         for case in 0..60 {
             let wn = 10.0;
-            let model = random_model(&mut rnd, case, wn);
-            let gamma = 10f64.powf(-0.5 + 1.5 * rnd());
-            let Ok(r) =
-                ForcedResponse::from_normalised(&model, gamma, Formulation::HarmonicBalance)
-            else {
+            let Some((_, _, r)) = random_response(&mut rnd, case, wn) else {
                 continue;
             };
             let mut warm: Option<Sample> = None;

@@ -472,6 +472,49 @@ fn identify_reports_its_stages() {
     }
 }
 
+/// `FitPlan::starts` reaches the race: each candidate's output-error fit
+/// is a global search of that many trial points (its own start and
+/// Latin-hypercube ones), each reported as a step. The oracle is the same
+/// fit with one start: the race announces and reports four times its steps
+/// with four (the option was ignored, silently, before the sixteenth
+/// session: the steps were the same).
+#[test]
+fn the_plans_starts_reach_every_race_candidate() {
+    use std::sync::Mutex;
+    let d = data(
+        &duffing_quadratic(),
+        &[0.5, 1.0, 2.0],
+        (8.0, 14.0),
+        60,
+        &[SweepDirection::Up, SweepDirection::Down],
+        None,
+    );
+    let race = |starts: usize| {
+        let events = Mutex::new(Vec::new());
+        let mut plan = FitPlan::new(ModelKind::Generalised)
+            .with_grid(9, 7)
+            .unwrap();
+        plan.starts = starts;
+        identify(&d, &plan, &|p| events.lock().unwrap().push(p)).unwrap();
+        let mut stages: Vec<(&str, usize, usize)> = Vec::new();
+        for e in events.into_inner().unwrap() {
+            match e {
+                IdentifyProgress::Stage { name, steps } => stages.push((name, steps, 0)),
+                IdentifyProgress::Step => stages.last_mut().expect("a stage").2 += 1,
+            }
+        }
+        let first = stages
+            .iter()
+            .find(|s| s.0 == "output error")
+            .copied()
+            .expect("a race");
+        (first.1, first.2)
+    };
+    let (announced, reported) = race(1);
+    assert!(reported >= 1, "{reported}");
+    assert_eq!(race(4), (4 * announced, 4 * reported));
+}
+
 /// With phases, the first line says which part does not fit. Duffing data
 /// (two levels up, 1 % amplitude noise, 0.3° phase noise) whose phases
 /// carry a ramp of 0 → 6° across the band that no model phase follows:

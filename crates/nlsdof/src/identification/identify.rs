@@ -463,7 +463,10 @@ pub struct FitPlan {
     pub grid: (usize, usize),
     /// Candidates refined by output error.
     pub refine: usize,
-    /// Extra global-search starts per refinement (1 = none).
+    /// Trial points of each race candidate's output-error fit: its own
+    /// start and `starts − 1` Latin-hypercube ones, of which at most
+    /// [`super::global::local_run_budget`] are run to a minimum (1 = the
+    /// local fit only, the default).
     pub starts: usize,
     pub seed: u64,
     pub lm: LmOptions,
@@ -2348,11 +2351,14 @@ fn race(
     let mut raced: Vec<(usize, usize, Sign)> =
         jobs.iter().map(|(i, j, _, s, _, _)| (*i, *j, *s)).collect();
     raced.dedup();
+    // each candidate with the plan's global-search starts (`FitPlan::starts`:
+    // its own start and `starts − 1` Latin-hypercube ones; one step each)
+    let mut opts = limited(&plan.lm, plan.seed, RACE_ITERATIONS);
+    opts.starts = plan.starts.max(1);
     progress(IdentifyProgress::Stage {
         name: "output error",
-        steps: jobs.len(),
+        steps: jobs.len() * opts.starts,
     });
-    let opts = limited(&plan.lm, plan.seed, RACE_ITERATIONS);
     let outcomes: Vec<Result<Option<(Candidate, Option<Fitted>)>, IdentifyError>> = jobs
         .into_par_iter()
         .map(|(i, j, ee, sign, revive, shift)| {

@@ -324,16 +324,16 @@ fn damping_regressor(p: &Point, eta: f64, sc: &Scales) -> f64 {
 /// per-point loop computed it, so a node's solution is the same bit for
 /// bit; the table only saves the repeated `exp`, `ln` and `sin_cos`
 /// (measured on the 24 °C beam's default generalised fit, 41 × 41 nodes,
-/// phase detected: the landscape stage went from 0.197 s to 0.133 s, its
-/// CPU time from 0.36 s to 0.26 s).
+/// phase detected: the landscape stage went from 0.197 s to 0.124 s, its
+/// CPU time from 0.36 s to 0.24 s).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct NodeColumns<'a> {
     /// The β entry `k fa` of each point's real row ([`stiffness_regressor`]
     /// at the node's ρ; `k` of [`Point::k`]).
-    pub fa: &'a [f64],
+    pub beta: &'a [f64],
     /// The κ entry `k fd/Ω_ref` of each point's imaginary row
     /// ([`damping_regressor`] at the node's η).
-    pub fd: &'a [f64],
+    pub kappa: &'a [f64],
     /// `exp(η ln Ωa)` per point ([`damping_positive`] at the node's η).
     pub damping_power: &'a [f64],
 }
@@ -341,13 +341,13 @@ pub(crate) struct NodeColumns<'a> {
 /// Owned [`NodeColumns`] of one node or one axis value.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Columns {
-    pub fa: Vec<f64>,
-    pub fd: Vec<f64>,
+    pub beta: Vec<f64>,
+    pub kappa: Vec<f64>,
     pub damping_power: Vec<f64>,
 }
 
 impl Columns {
-    /// The `ρ` column of every point.
+    /// The β entries of every point at `rho`.
     pub fn stiffness(prep: &Prepared, rho: f64) -> Vec<f64> {
         let sc = &prep.scales;
         prep.points
@@ -356,7 +356,7 @@ impl Columns {
             .collect()
     }
 
-    /// The `η` columns of every point.
+    /// The κ entries and the sign test's powers of every point at `eta`.
     pub fn damping(prep: &Prepared, eta: f64) -> (Vec<f64>, Vec<f64>) {
         let sc = &prep.scales;
         let wr = sc.omega_ref;
@@ -371,18 +371,18 @@ impl Columns {
 
     /// Every column of one node.
     pub fn node(prep: &Prepared, rho: f64, eta: f64) -> Self {
-        let (fd, damping_power) = Self::damping(prep, eta);
+        let (kappa, damping_power) = Self::damping(prep, eta);
         Self {
-            fa: Self::stiffness(prep, rho),
-            fd,
+            beta: Self::stiffness(prep, rho),
+            kappa,
             damping_power,
         }
     }
 
     pub fn borrowed(&self) -> NodeColumns<'_> {
         NodeColumns {
-            fa: &self.fa,
-            fd: &self.fd,
+            beta: &self.beta,
+            kappa: &self.kappa,
             damping_power: &self.damping_power,
         }
     }
@@ -647,10 +647,10 @@ fn complex_gain_entries(p: &Point, sign: f64, delay: f64, wr: f64) -> [f64; 4] {
 
 /// The coefficient part of point `i`'s two phase-form rows (real: α, β;
 /// imaginary: δ, κ; scaled as in the module docs) and the index of the
-/// first gain column; `fa`, `fd` from the node's columns.
+/// first gain column; the β and κ entries from the node's columns.
 fn coefficient_rows(
     p: &Point,
-    (kfa, kfd): (f64, f64),
+    (beta, kappa): (f64, f64),
     terms: Terms,
 ) -> ([f64; 6], [f64; 6], usize) {
     let mut re = [0.0; 6];
@@ -659,13 +659,13 @@ fn coefficient_rows(
     re[q] = p.row_alpha;
     q += 1;
     if terms.stiffness {
-        re[q] = kfa;
+        re[q] = beta;
         q += 1;
     }
     im[q] = p.row_delta;
     q += 1;
     if terms.damping {
-        im[q] = kfd;
+        im[q] = kappa;
         q += 1;
     }
     (re, im, q)
@@ -711,7 +711,7 @@ fn solve_phase_complex(
             Some(t) => t[i],
             None => complex_gain_entries(p, sign, delay, wr),
         };
-        let (mut re, mut im, q) = coefficient_rows(p, (node.fa[i], node.fd[i]), terms);
+        let (mut re, mut im, q) = coefficient_rows(p, (node.beta[i], node.kappa[i]), terms);
         // G̃ = Gr + i Gi (unknowns scaled by 1/Ω_ref²: the rows are divided by Ω_ref²)
         re[q] = gr_re;
         re[q + 1] = gi_re;
@@ -820,7 +820,7 @@ fn solve_phase_known(
             Some(t) => t[i],
             None => conv.lag(p.psi, p.omega).sin_cos(),
         };
-        let (mut re, mut im, q) = coefficient_rows(p, (node.fa[i], node.fd[i]), terms);
+        let (mut re, mut im, q) = coefficient_rows(p, (node.beta[i], node.kappa[i]), terms);
         let mut bre = p.rhs;
         let mut bim = 0.0;
         match terms.gain {

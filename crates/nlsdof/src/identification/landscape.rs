@@ -240,8 +240,8 @@ pub fn landscape_cancellable(
                             match &damping {
                                 Some((fd, power)) => {
                                     let node = NodeColumns {
-                                        fa: &stiffness[ir],
-                                        fd,
+                                        beta: &stiffness[ir],
+                                        kappa: fd,
                                         damping_power: power,
                                     };
                                     solve_phase_with(prep, terms, (r, e), conv, delay, node, trig)

@@ -437,33 +437,43 @@ fn suite_generator_case_with_phase_fits() {
     assert!(rel(r.fit.theta[ALPHA], c.truth[ALPHA]) < 5e-3);
 }
 
-/// The staged fit reports its stages in order, each announcing how many
-/// steps it reports: one per landscape row, one per output-error start.
-#[test]
-fn identify_reports_its_stages() {
-    use std::sync::Mutex;
-    let d = data(
+/// The Duffing + quadratic damping model, 3 levels swept up and
+/// down, 60 steps, noise free: the data of the progress tests.
+fn progress_data() -> Dataset {
+    data(
         &duffing_quadratic(),
         &[0.5, 1.0, 2.0],
         (8.0, 14.0),
         60,
         &[SweepDirection::Up, SweepDirection::Down],
         None,
-    );
+    )
+}
+
+/// The stages `identify` reports for `plan` on `d`, in order: (name,
+/// steps announced, steps reported).
+fn reported_stages(d: &Dataset, plan: &FitPlan) -> Vec<(&'static str, usize, usize)> {
+    use std::sync::Mutex;
     let events = Mutex::new(Vec::new());
-    let plan = FitPlan::new(ModelKind::Generalised)
-        .with_grid(9, 7)
-        .unwrap();
-    identify(&d, &plan, &|p| events.lock().unwrap().push(p)).unwrap();
-    let events = events.into_inner().unwrap();
-    // split into stages: (name, announced, reported)
-    let mut stages: Vec<(&str, usize, usize)> = Vec::new();
-    for e in &events {
-        match *e {
+    identify(d, plan, &|p| events.lock().unwrap().push(p)).unwrap();
+    let mut stages: Vec<(&'static str, usize, usize)> = Vec::new();
+    for e in events.into_inner().unwrap() {
+        match e {
             IdentifyProgress::Stage { name, steps } => stages.push((name, steps, 0)),
             IdentifyProgress::Step => stages.last_mut().expect("a step before any stage").2 += 1,
         }
     }
+    stages
+}
+
+/// The staged fit reports its stages in order, each announcing how many
+/// steps it reports: one per landscape row, one per output-error start.
+#[test]
+fn identify_reports_its_stages() {
+    let plan = FitPlan::new(ModelKind::Generalised)
+        .with_grid(9, 7)
+        .unwrap();
+    let stages = reported_stages(&progress_data(), &plan);
     assert_eq!(stages[0], ("landscape", 7, 7), "{stages:?}");
     assert_eq!(stages[1].0, "output error", "{stages:?}");
     assert!(stages[1].2 >= 1 && stages[1].2 <= stages[1].1, "{stages:?}");
@@ -480,29 +490,13 @@ fn identify_reports_its_stages() {
 /// session: the steps were the same).
 #[test]
 fn the_plans_starts_reach_every_race_candidate() {
-    use std::sync::Mutex;
-    let d = data(
-        &duffing_quadratic(),
-        &[0.5, 1.0, 2.0],
-        (8.0, 14.0),
-        60,
-        &[SweepDirection::Up, SweepDirection::Down],
-        None,
-    );
+    let d = progress_data();
     let race = |starts: usize| {
-        let events = Mutex::new(Vec::new());
         let mut plan = FitPlan::new(ModelKind::Generalised)
             .with_grid(9, 7)
             .unwrap();
         plan.starts = starts;
-        identify(&d, &plan, &|p| events.lock().unwrap().push(p)).unwrap();
-        let mut stages: Vec<(&str, usize, usize)> = Vec::new();
-        for e in events.into_inner().unwrap() {
-            match e {
-                IdentifyProgress::Stage { name, steps } => stages.push((name, steps, 0)),
-                IdentifyProgress::Step => stages.last_mut().expect("a stage").2 += 1,
-            }
-        }
+        let stages = reported_stages(&d, &plan);
         let first = stages
             .iter()
             .find(|s| s.0 == "output error")

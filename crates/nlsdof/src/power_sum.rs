@@ -131,6 +131,13 @@ pub(crate) fn cold_requested() -> bool {
     }
 }
 
+/// `rows` made `n` empty rows, keeping the memory of those it had (the
+/// fold search refills the same rows at every sample).
+pub(crate) fn clear_rows(rows: &mut Vec<Vec<f64>>, n: usize) {
+    rows.resize_with(n, Vec::new);
+    rows.iter_mut().for_each(Vec::clear);
+}
+
 impl PowerSum {
     /// Builds `Σ c x^e` from `(exponent, coefficient)` pairs. Non-finite
     /// entries are the caller's responsibility (checked in debug builds).
@@ -391,8 +398,7 @@ impl PowerSum {
         levels: &mut Vec<Vec<f64>>,
         scratch: &mut Vec<f64>,
     ) {
-        levels.resize(self.len().max(1), Vec::new());
-        levels.iter_mut().for_each(Vec::clear);
+        clear_rows(levels, self.len().max(1));
         scratch.clear();
         self.roots_rec_warm(lo, hi, evaluators, hints, levels, scratch);
     }

@@ -416,10 +416,8 @@ impl ResponseEquation {
         let hints = if u == 0.0 {
             hints
         } else {
-            shifted.truncate(hints.len());
-            shifted.resize_with(hints.len(), Vec::new);
+            crate::power_sum::clear_rows(shifted, hints.len());
             for (to, h) in shifted.iter_mut().zip(hints) {
-                to.clear();
                 to.extend(h.iter().map(|t| t - u));
             }
             &shifted[..]

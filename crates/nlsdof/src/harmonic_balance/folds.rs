@@ -149,10 +149,8 @@ fn sample_in(
         None => hints.clear(),
         Some(s) => {
             let dw = (omega / s.omega).ln();
-            hints.truncate(s.levels.len());
-            hints.resize_with(s.levels.len(), Vec::new);
+            crate::power_sum::clear_rows(hints, s.levels.len());
             for (k, (h, ts)) in hints.iter_mut().zip(&s.levels).enumerate() {
-                h.clear();
                 match s.velocity.get(k) {
                     Some(v) if v.len() == ts.len() => {
                         h.extend(ts.iter().zip(v).map(|(t, v)| t + v * dw));
@@ -175,11 +173,8 @@ fn sample_in(
         None => velocity.clear(),
         Some(s) => {
             let dw = (omega / s.omega).ln();
-            let n = levels.len().min(s.levels.len());
-            velocity.truncate(n);
-            velocity.resize_with(n, Vec::new);
+            crate::power_sum::clear_rows(&mut velocity, levels.len().min(s.levels.len()));
             for ((v, now), then) in velocity.iter_mut().zip(&levels).zip(&s.levels) {
-                v.clear();
                 if now.len() == then.len() && dw != 0.0 {
                     v.extend(now.iter().zip(then).map(|(a, b)| (a - b) / dw));
                 }

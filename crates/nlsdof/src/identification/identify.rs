@@ -4320,18 +4320,13 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
         } else {
             f64::NAN
         };
-        let split = match zs[ci] {
-            ((za, na), Some((zp, np))) if na > 0 && np > 0 => {
-                let all = split_all.get_or_insert([(0.0, 0); 2]);
-                all[0] = (all[0].0 + za, all[0].1 + na);
-                all[1] = (all[1].0 + zp, all[1].1 + np);
-                Some(NoiseSplit {
-                    amplitude_mean_z2: za / na as f64,
-                    phase_mean_z2: zp / np as f64,
-                })
-            }
-            _ => None,
-        };
+        let (amp, phase) = zs[ci];
+        let split = phase.and_then(|phase| NoiseSplit::of(amp, phase));
+        if let (Some(_), Some((zp, np))) = (split, phase) {
+            let all = split_all.get_or_insert([(0.0, 0); 2]);
+            all[0] = (all[0].0 + amp.0, all[0].1 + amp.1);
+            all[1] = (all[1].0 + zp, all[1].1 + np);
+        }
         let noise = CurveNoise {
             mean_z2,
             noise_rms: rms(&mut (0..n).map(|i| nm.amplitude[ci][i] * to_m(i))),
@@ -4425,10 +4420,7 @@ fn judge(data: &Dataset, f: &Fitted) -> (Vec<CurveReport>, Adequacy) {
             escalation: Vec::new(),
             needs_early_jumps: None,
             late_folds,
-            split: split_all.map(|[(za, na), (zp, np)]| NoiseSplit {
-                amplitude_mean_z2: za / na as f64,
-                phase_mean_z2: zp / np as f64,
-            }),
+            split: split_all.and_then(|[amp, phase]| NoiseSplit::of(amp, phase)),
         },
     )
 }

@@ -466,6 +466,15 @@ pub struct NoiseSplit {
 }
 
 impl NoiseSplit {
+    /// The split of the `(Σ z², count)` sums of the amplitude and the
+    /// phase residuals; `None` when either part counts no residual.
+    pub fn of((za, na): Z2Sum, (zp, np): Z2Sum) -> Option<Self> {
+        (na > 0 && np > 0).then(|| Self {
+            amplitude_mean_z2: za / na as f64,
+            phase_mean_z2: zp / np as f64,
+        })
+    }
+
     /// The amplitudes' and the phases' residuals in units of the noise,
     /// `√(mean z²)` of each.
     pub fn ratios(&self) -> (f64, f64) {
